@@ -1,0 +1,1 @@
+"""Non-robot example models: they prove the framework is generic."""

@@ -1,0 +1,20 @@
+"""Registers snakesim's built-in components through the public hook.
+
+Third-party packages do exactly this in their own module, named by an entry
+point in the ``snakesim`` group (see docs/plugins.md).
+"""
+
+from snakesim.framework import hookimpl
+
+from .examples.mass_spring import PointMass, SpringDamper
+from .examples.pendulum import Pendulum, ViscousDamper
+from .signals.blocks import Gain, Sum, ZeroOrderHold
+from .signals.sources import Constant, Sine, Step
+
+BUILTIN = (Constant, Step, Sine, Gain, Sum, ZeroOrderHold, Pendulum, ViscousDamper, PointMass, SpringDamper)
+
+
+@hookimpl
+def snakesim_register_components(registry):
+    for cls in BUILTIN:
+        registry.add_component(cls)

@@ -1,0 +1,1 @@
+"""Generic signal blocks: sources, gains, sums, sample-and-hold. No physics."""

@@ -1,0 +1,1 @@
+"""Run configurations (CLI option sets) shipped with snakesim."""

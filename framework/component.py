@@ -1,0 +1,145 @@
+"""The component: parameters, ports, optional continuous or discrete state.
+
+A component is a class with a frozen pydantic ``Params`` model, ports declared
+as class attributes (see :mod:`.ports`) and up to five methods::
+
+    output(t, x, u, y)        write outputs into y's preallocated arrays
+    continuous_state()        -> ContinuousState (initial value, layout) or None
+    derivative(t, x, u, dx)   write dx/dt (tangent space) into dx
+    discrete_state()          -> initial discrete state array or None
+    update(t, xd, u)          advance the discrete state in place (at its rate)
+
+``x`` is the component's slice of the state the simulator owns (Drake's
+Context idea): the component object keeps parameters and derived constants
+only, so one instance can serve many runs. ``u`` reads inputs (zero-copy
+views of the upstream outputs), ``y`` holds the output buffers.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any, ClassVar, Generic, TypeVar
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict
+
+from .ports import Input, Output
+
+
+class Params(BaseModel):
+    """Base of every component's parameters: frozen, unknown keys rejected."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+
+P = TypeVar("P", bound=BaseModel)
+
+
+@dataclasses.dataclass(frozen=True)
+class ContinuousState:
+    """Initial continuous state and its layout.
+
+    x0:           initial value, shape (nx,)
+    ndx:          size of the tangent space (derivatives, increments); differs
+                  from nx on manifolds (a quaternion has 4 coordinates, 3 rates)
+    second_order: nv when the state is [q, v] with dq (in the tangent space)
+                  equal to v: the semi-implicit Euler integrator needs this split
+    names:        element names for recording, len nx
+    """
+
+    x0: np.ndarray
+    ndx: int | None = None
+    second_order: int | None = None
+    names: tuple[str, ...] | None = None
+
+    @property
+    def nx(self) -> int:
+        return int(np.asarray(self.x0).size)
+
+    @property
+    def tangent_size(self) -> int:
+        return self.nx if self.ndx is None else int(self.ndx)
+
+
+class StopFlag:
+    """Shared, mutable: a component asks the run to end by setting a reason."""
+
+    __slots__ = ("reason", "source")
+
+    def __init__(self):
+        self.reason: str | None = None
+        self.source: str | None = None
+
+
+class Component(Generic[P]):
+    Params: ClassVar[type[BaseModel]] = Params
+    #: registry name, e.g. "pendulum"; set by the registry if left empty
+    type_name: ClassVar[str] = ""
+    #: sinks (recorders, viewers, publishers) keep their upstream alive when pruning
+    is_sink: ClassVar[bool] = False
+    inputs: ClassVar[dict[str, Input]] = {}
+    outputs: ClassVar[dict[str, Output]] = {}
+
+    def __init_subclass__(cls, **kw):
+        super().__init_subclass__(**kw)
+        ins, outs = {}, {}
+        for klass in reversed(cls.__mro__):
+            for name, attr in vars(klass).items():
+                if isinstance(attr, Input):
+                    ins[name] = attr
+                elif isinstance(attr, Output):
+                    outs[name] = attr
+        cls.inputs, cls.outputs = ins, outs
+        for name, port in outs.items():
+            if port.calc is not None and not callable(getattr(cls, port.calc, None)):
+                raise TypeError(f"{cls.__name__}.{name}: calc method '{port.calc}' is not defined")
+            bad = [i for i in port.feedthrough_inputs(list(ins)) if i not in ins]
+            if bad:
+                raise TypeError(f"{cls.__name__}.{name}: feedthrough names unknown inputs {bad}")
+
+    def __init__(self, name: str = "component", params: P | dict | None = None, rate: float | None = None):
+        self.name = name
+        if params is None:
+            params = {}
+        self.p: P = params if isinstance(params, self.Params) else self.Params(**params)
+        if rate is not None and rate <= 0:
+            raise ValueError(f"{name}: rate must be > 0 Hz, got {rate}")
+        self.rate = rate
+        self._stop = StopFlag()
+        self.setup()
+
+    # -- hooks a component overrides ------------------------------------------
+    def setup(self) -> None:
+        """Derive constants from ``self.p`` (called once, after validation)."""
+
+    def continuous_state(self) -> ContinuousState | None:
+        return None
+
+    def discrete_state(self) -> np.ndarray | None:
+        return None
+
+    def output(self, t: float, x, u, y) -> None:
+        """Compute the outputs that have no ``calc`` method of their own."""
+
+    def derivative(self, t: float, x, u, dx) -> None:
+        raise NotImplementedError(f"{type(self).__name__} declares continuous state but no derivative()")
+
+    def update(self, t: float, xd, u) -> None:
+        raise NotImplementedError(f"{type(self).__name__} declares discrete state but no update()")
+
+    def integrate(self, x: np.ndarray, dx: np.ndarray, out: np.ndarray) -> None:
+        """out = x ⊕ dx on the state's manifold; Euclidean by default."""
+        np.add(x, dx, out=out)
+
+    # -- services ------------------------------------------------------------
+    def stop(self, reason: str) -> None:
+        """End the run after this step with ``reason`` (e.g. a mobility failure)."""
+        if self._stop.reason is None:
+            self._stop.reason, self._stop.source = reason, self.name
+
+    @classmethod
+    def has_manifold_state(cls) -> bool:
+        return cls.integrate is not Component.integrate
+
+    def __repr__(self) -> str:
+        return f"<{type(self).__name__} {self.name!r}>"

@@ -1,0 +1,94 @@
+"""``${...}`` templates in assemblies: parameter references and integer arithmetic.
+
+Assemblies never ``eval`` strings. A template may reference parameters
+(``${k}``, ``${robot.modules}``) and combine numbers with ``+ - * / // %``
+and parentheses (``${i+1}``, ``${n*2}``): enough to chain repeated
+sub-assemblies. The expression is parsed with :mod:`ast` and only those node
+types are walked; anything else is an error naming the template.
+
+A string that is exactly one template keeps the value's type (``"${k}"`` ->
+2.5); templates inside a longer string are formatted into it (``seg${i}``).
+"""
+
+from __future__ import annotations
+
+import ast
+import operator
+import re
+
+from .errors import ConfigError
+
+_TEMPLATE = re.compile(r"\$\{([^}]*)\}")
+_BINOPS = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul,
+           ast.Div: operator.truediv, ast.FloorDiv: operator.floordiv, ast.Mod: operator.mod}
+
+
+def _lookup(path: str, scope: dict, expr: str):
+    value = scope
+    for part in path.split("."):
+        if isinstance(value, dict) and part in value:
+            value = value[part]
+        else:
+            known = ", ".join(sorted(scope)) or "none"
+            raise ConfigError(f"'${{{expr}}}' references '{path}', which is not a parameter "
+                              f"(parameters here: {known})")
+    return value
+
+
+def _eval(node, scope, expr):
+    if isinstance(node, ast.Expression):
+        return _eval(node.body, scope, expr)
+    if isinstance(node, ast.Constant) and isinstance(node.value, (int, float)):
+        return node.value
+    if isinstance(node, (ast.Name, ast.Attribute)):
+        return _lookup(ast.unparse(node), scope, expr)
+    if isinstance(node, ast.BinOp) and type(node.op) in _BINOPS:
+        return _BINOPS[type(node.op)](_eval(node.left, scope, expr), _eval(node.right, scope, expr))
+    if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
+        v = _eval(node.operand, scope, expr)
+        return -v if isinstance(node.op, ast.USub) else v
+    raise ConfigError(f"'${{{expr}}}': only parameter names, numbers, + - * / // % and "
+                      f"parentheses are allowed in templates")
+
+
+def evaluate(expr: str, scope: dict):
+    try:
+        tree = ast.parse(expr.strip(), mode="eval")
+    except SyntaxError:
+        raise ConfigError(f"'${{{expr}}}' is not a valid expression") from None
+    return _eval(tree, scope, expr)
+
+
+def substitute(value, scope: dict):
+    """Recursively expand templates in strings inside dicts/lists (positions kept)."""
+    if isinstance(value, str):
+        m = _TEMPLATE.fullmatch(value.strip())
+        if m:
+            return evaluate(m.group(1), scope)
+        if "${" not in value:
+            return value
+        return _TEMPLATE.sub(lambda mm: _format(evaluate(mm.group(1), scope)), value)
+    if isinstance(value, dict):
+        out = type(value)()
+        _copy_position(value, out)
+        for k, v in value.items():
+            out[substitute(k, scope) if isinstance(k, str) else k] = substitute(v, scope)
+        if hasattr(value, "pos"):
+            out.pos = {substitute(k, scope) if isinstance(k, str) else k: ln for k, ln in value.pos.items()}
+        return out
+    if isinstance(value, list):
+        out = type(value)(substitute(v, scope) for v in value)
+        _copy_position(value, out)
+        return out
+    return value
+
+
+def _copy_position(src, dst) -> None:
+    if hasattr(src, "file") and hasattr(dst, "__dict__"):
+        dst.__dict__.update(src.__dict__)
+
+
+def _format(v) -> str:
+    if isinstance(v, float) and v.is_integer():
+        return str(int(v))
+    return str(v)

@@ -1,0 +1,31 @@
+"""The hooks a snakesim plugin may implement (entry-point group ``snakesim``)."""
+
+import pluggy
+
+hookspec = pluggy.HookspecMarker("snakesim")
+hookimpl = pluggy.HookimplMarker("snakesim")
+
+
+@hookspec
+def snakesim_register_components(registry):
+    """Add component classes with ``registry.add_component(cls, name=None)``."""
+
+
+@hookspec
+def snakesim_register_integrators(registry):
+    """Add integrator classes with ``registry.add_integrator(cls, name=None)``."""
+
+
+@hookspec
+def snakesim_assembly_paths():
+    """Return folders (paths or importlib Traversables) holding assembly YAML files."""
+
+
+@hookspec(firstresult=True)
+def snakesim_default_assembly():
+    """Return the name of the scene ``run`` and ``check`` use when none is given."""
+
+
+@hookspec
+def snakesim_add_commands(cli):
+    """Add click commands to the ``snakesim`` command group."""

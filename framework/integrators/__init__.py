@@ -1,0 +1,1 @@
+"""Integrators, one scheme per module, registered through ``snakesim_register_integrators``."""

@@ -1,0 +1,76 @@
+"""Configuration layering: assembly < config files < ``--set`` < explicit CLI flags.
+
+Mappings merge deeply, key by key; any other value (lists included) is
+replaced whole by the later layer. Every merged mapping keeps the position of
+the layer each key came from, so errors still point at the right file.
+"""
+
+from __future__ import annotations
+
+import difflib
+
+import yaml
+
+from .errors import ConfigError
+from .yaml_source import LocatedDict
+
+#: top-level keys of an assembly / resolved configuration
+TOP_KEYS = ("description", "parameters", "sim", "include", "components", "connections", "record", "stop")
+
+
+def deep_merge(base, over):
+    if not (isinstance(base, dict) and isinstance(over, dict)):
+        return over
+    out = LocatedDict()
+    out.file = getattr(over, "file", None) or getattr(base, "file", None)
+    out.line = getattr(over, "line", None) or getattr(base, "line", None)
+    for layer in (base, over):
+        pos = getattr(layer, "pos", {})
+        for k in layer:
+            out.pos[k] = pos.get(k, (getattr(layer, "file", None), None))
+    for k, v in base.items():
+        out[k] = v
+    for k, v in over.items():
+        out[k] = deep_merge(base[k], v) if k in base else v
+    return out
+
+
+def parse_set(item: str) -> tuple[list[str], object]:
+    """``a.b.c=value`` -> (["a","b","c"], value parsed as a YAML scalar/flow value)."""
+    if "=" not in item:
+        raise ConfigError(f"'--set {item}' needs the form key.path=value", "--set")
+    key, raw = item.split("=", 1)
+    key = key.strip()
+    if not key or any(not part for part in key.split(".")):
+        raise ConfigError(f"'--set {item}': empty key in '{key}'", "--set")
+    try:
+        value = yaml.safe_load(raw) if raw.strip() else ""
+    except yaml.YAMLError as e:
+        raise ConfigError(f"'--set {item}': value '{raw}' is not valid YAML ({e.problem})", "--set") from None
+    return key.split("."), value
+
+
+def set_override(item: str, parameters: dict) -> LocatedDict:
+    """Turn one ``--set`` into a nested mapping to merge.
+
+    A path whose first key is not a top-level key (``sim``, ``components``…)
+    addresses an assembly parameter: ``--set robot.modules=4`` is
+    ``parameters.robot.modules``.
+    """
+    path, value = parse_set(item)
+    if path[0] not in TOP_KEYS:
+        if path[0] not in parameters:
+            options = list(TOP_KEYS) + list(parameters)
+            close = difflib.get_close_matches(path[0], options, n=3, cutoff=0.5)
+            hint = f"; did you mean {', '.join(close)}?" if close else ""
+            raise ConfigError(
+                f"'{path[0]}' is neither a top-level key ({', '.join(TOP_KEYS)}) nor a parameter of "
+                f"this assembly ({', '.join(parameters) or 'it has none'}){hint}", "--set", ".".join(path))
+        path = ["parameters"] + path
+    node = value
+    for part in reversed(path):
+        d = LocatedDict()
+        d.file = "--set"
+        d[part] = node
+        node = d
+    return node

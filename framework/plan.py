@@ -1,0 +1,427 @@
+"""Compile a resolved assembly into a flat, preallocated execution plan.
+
+Built once: instances, port buffers (inputs alias upstream outputs), state
+layout, a topological order of evaluation nodes, per-phase lists for the
+multi-rate discrete updates, and the set of components to prune. The step
+loop (:mod:`.simulator`) then only walks prebuilt lists of
+``(method, state view, inputs, outputs)`` tuples.
+
+Evaluation nodes are (component, output group): the outputs without a
+``calc`` method form one group computed by ``output()``, each ``calc`` port its
+own. A node depends on the inputs its ports feed through, so a state-only
+output never creates an algebraic loop.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import defaultdict
+from dataclasses import dataclass, field
+
+import numpy as np
+from pydantic import ValidationError
+
+from .assembly import Resolved
+from .binding import Cell, make_namespace
+from .component import Component, StopFlag
+from .errors import BuildError, ConfigError
+from .signals import Structured
+from .wiring import PortInfo, PortRef, check_compatible, parse_ref, port_infos
+
+MAX_PHASES = 4096
+
+
+@dataclass
+class Node:
+    comp: Component
+    method: object
+    ports: tuple[str, ...]
+    deps: tuple[str, ...]          # inputs it feeds through
+    period: int                    # base steps between evaluations (1 = every step)
+    discrete: bool                 # held between ticks (rate set or sink)
+
+    def label(self) -> str:
+        return f"{self.comp.name}[{','.join(self.ports)}]"
+
+
+@dataclass
+class StateSlice:
+    comp: Component
+    x: slice
+    dx: slice
+    second_order: int | None
+    manifold: bool
+
+
+@dataclass
+class Plan:
+    components: dict[str, Component]
+    pruned: list[str]
+    infos: dict[str, dict[str, PortInfo]]
+    sources: dict[PortRef, PortRef]               # input -> upstream output
+    out_buffers: dict[PortRef, object]            # ndarray or Cell
+    nodes: list[Node]                             # topological order
+    minor: list[tuple]                            # continuous-stage evaluation
+    major: list[list[tuple]]                      # per phase
+    updates: list[list[tuple]]                    # per phase
+    derivs: list[tuple]
+    n_phases: int
+    X: np.ndarray
+    DX: np.ndarray
+    XD: np.ndarray
+    slices: list[StateSlice]
+    dslices: dict[str, slice]
+    n_euclid_x: int
+    stop_flag: StopFlag
+    dt: float
+    report: dict = field(default_factory=dict)
+
+    # -- the continuous system the integrators see ------------------------------
+    @property
+    def nx(self) -> int:
+        return self.X.size
+
+    @property
+    def ndx(self) -> int:
+        return self.DX.size
+
+    def f(self, t: float, X: np.ndarray) -> np.ndarray:
+        """dX/dt (tangent space) at (t, X); returns the shared DX buffer."""
+        if X is not self.X:
+            np.copyto(self.X, X)
+        for fn, x, u, y in self.minor:
+            fn(t, x, u, y)
+        for fn, x, u, dx in self.derivs:
+            fn(t, x, u, dx)
+        return self.DX
+
+    def integrate(self, X: np.ndarray, dX: np.ndarray, out: np.ndarray) -> None:
+        """out = X ⊕ dX: a vector add for Euclidean states, the component's own map on manifolds."""
+        e = self.n_euclid_x
+        np.add(X[:e], dX[:e], out=out[:e])
+        for s in self._manifold:
+            s.comp.integrate(X[s.x], dX[s.dx], out[s.x])
+
+    def second_order_pairs(self) -> list[tuple[slice, slice]]:
+        """(position-tangent slice, velocity slice) in DX for each [q, v] state."""
+        pairs = []
+        for s in self.slices:
+            if s.second_order:
+                nv = s.second_order
+                start = s.dx.start
+                pairs.append((slice(start, start + nv), slice(start + nv, start + 2 * nv)))
+        return pairs
+
+    def __post_init__(self):
+        self._manifold = [s for s in self.slices if s.manifold]
+
+    def component_of_x(self, index: int) -> str:
+        for s in self.slices:
+            if s.x.start <= index < s.x.stop:
+                return s.comp.name
+        return "?"
+
+    def component_of_xd(self, index: int) -> str:
+        for name, sl in self.dslices.items():
+            if sl.start <= index < sl.stop:
+                return name
+        return "?"
+
+
+# -- helpers ---------------------------------------------------------------------
+
+def _instantiate(resolved: Resolved, registry) -> dict[str, Component]:
+    comps = {}
+    for name, spec in resolved.components.items():
+        where = resolved.where.get(name)
+        try:
+            cls = registry.component(spec.type)
+        except Exception as e:
+            raise ConfigError(str(e), where, f"components.{name}.type") from None
+        try:
+            comps[name] = cls(name, spec.params, spec.rate)
+        except ValidationError as e:
+            err = e.errors()[0]
+            loc = ".".join(str(p) for p in err["loc"])
+            msg = err["msg"]
+            if err["type"] == "extra_forbidden":
+                msg = f"unknown parameter; {cls.__name__} takes: {', '.join(cls.Params.model_fields) or 'none'}"
+            elif not isinstance(err.get("input"), (dict, list)):
+                msg += f" (got {err.get('input')!r})"
+            raise ConfigError(msg, where, f"components.{name}.params.{loc}") from None
+        except (ValueError, TypeError) as e:
+            raise ConfigError(str(e), where, f"components.{name}") from None
+    return comps
+
+
+def _period(comp: Component, dt: float) -> int:
+    if comp.rate is None:
+        return 1
+    steps = 1.0 / (comp.rate * dt)
+    n = round(steps)
+    if n < 1 or abs(steps - n) > 1e-6 * max(1.0, steps):
+        raise BuildError(f"{comp.name}: rate {comp.rate:g} Hz is not an integer number of base steps "
+                         f"(dt = {dt:g} s gives {steps:.4g} steps per tick); valid rates are "
+                         f"{1 / dt:g}/k Hz for integer k >= 1, e.g. {1 / (dt * max(1, n)):g} Hz")
+    return n
+
+
+def _cycle(nodes: list[Node], edges: dict[int, list[tuple[int, PortRef, PortRef]]]) -> str:
+    """Find one cycle among ``nodes`` (indices in edges) and spell it as ports."""
+    color, stack = {}, []
+
+    def dfs(i):
+        color[i] = 1
+        stack.append(i)
+        for j, src, dst in edges.get(i, ()):
+            if color.get(j) == 1:
+                k = stack.index(j)
+                return stack[k:] + [j]
+            if color.get(j) is None:
+                r = dfs(j)
+                if r:
+                    return r
+        color[i] = 2
+        stack.pop()
+        return None
+
+    for i in range(len(nodes)):
+        if color.get(i) is None:
+            cyc = dfs(i)
+            if cyc:
+                parts = []
+                for a, b in zip(cyc, cyc[1:]):
+                    src, dst = next((s, d) for j, s, d in edges[a] if j == b)
+                    parts.append(f"{src} -> {dst}")
+                return " ; ".join(parts)
+    return "?"
+
+
+# -- the build -----------------------------------------------------------------
+
+def build(resolved: Resolved, registry) -> Plan:
+    dt = resolved.sim.dt
+    comps = _instantiate(resolved, registry)
+    infos = {name: port_infos(c) for name, c in comps.items()}
+
+    # connections ---------------------------------------------------------------
+    sources: dict[PortRef, PortRef] = {}
+    where_of: dict[PortRef, str] = {}
+    for s, t, where in resolved.connections:
+        src = parse_ref(s, comps, "output", where)
+        dst = parse_ref(t, comps, "input", where)
+        if dst in sources:
+            raise BuildError(f"input {dst} is wired twice: from {sources[dst]} ({where_of[dst]}) and from {src} "
+                             f"({where}); an input takes one source (add a sum block to combine)")
+        check_compatible(src, infos[src.comp][src.port], dst, infos[dst.comp][dst.port], where)
+        sources[dst] = src
+        where_of[dst] = where
+
+    missing = [PortRef(n, i) for n, c in comps.items() for i, p in c.inputs.items()
+               if p.required and PortRef(n, i) not in sources]
+    if missing:
+        lines = [f"  {m} ({comps[m.comp].type_name}, {infos[m.comp][m.port].describe()})" for m in missing]
+        raise BuildError("required inputs are not connected:\n" + "\n".join(lines)
+                         + "\nconnect each with 'source.output -> component.input'")
+
+    recorded = [(parse_ref(r, comps, "output", w), w) for r, w in resolved.record]
+    for ref, w in recorded:
+        if isinstance(infos[ref.comp][ref.port].signal, Structured):
+            raise BuildError(f"record {ref} ({w}): only numeric ports can be recorded")
+    stop_refs = [(parse_ref(s.signal, comps, "output", w), s, w) for s, w in resolved.stop]
+
+    # pruning: keep what reaches a state, a sink, a recorder or a stop condition -
+    cstates = {n: c.continuous_state() for n, c in comps.items()}
+    dstates = {n: c.discrete_state() for n, c in comps.items()}
+    needed = {n for n, c in comps.items() if c.is_sink or cstates[n] is not None or dstates[n] is not None}
+    needed |= {r.comp for r, _ in recorded} | {r.comp for r, _, _ in stop_refs}
+    upstream = defaultdict(set)
+    for dst, src in sources.items():
+        upstream[dst.comp].add(src.comp)
+    todo = list(needed)
+    while todo:
+        n = todo.pop()
+        for m in upstream[n]:
+            if m not in needed:
+                needed.add(m)
+                todo.append(m)
+    pruned = [n for n in comps if n not in needed]
+    comps = {n: c for n, c in comps.items() if n in needed}
+    sources = {d: s for d, s in sources.items() if d.comp in needed}
+
+    # buffers -------------------------------------------------------------------
+    out_buffers: dict[PortRef, object] = {}
+    for n, c in comps.items():
+        for p in c.outputs:
+            info = infos[n][p]
+            ref = PortRef(n, p)
+            if isinstance(info.signal, Structured):
+                out_buffers[ref] = Cell(None)
+            else:
+                out_buffers[ref] = np.zeros(info.shape, dtype=info.signal.dtype)
+    stop_flag = StopFlag()
+    u_of, y_of = {}, {}
+    for n, c in comps.items():
+        numeric_in, cells_in = {}, {}
+        for i, port in c.inputs.items():
+            ref = PortRef(n, i)
+            info = infos[n][i]
+            if ref in sources:
+                buf = out_buffers[sources[ref]]
+            elif isinstance(info.signal, Structured):
+                buf = Cell(port.default)
+            else:
+                default = 0.0 if port.default is None else port.default
+                shape = info.shape if info.shape is not None else np.shape(default)
+                buf = np.array(np.broadcast_to(np.asarray(default, dtype=info.signal.dtype), shape))
+            if isinstance(buf, Cell):
+                cells_in[i] = buf
+            else:
+                view = buf.view()
+                view.flags.writeable = False
+                numeric_in[i] = view
+        u_of[n] = make_namespace(n, "inputs", numeric_in, cells_in)
+        mine = {p: out_buffers[PortRef(n, p)] for p in c.outputs}
+        y_of[n] = make_namespace(n, "outputs", {p: b for p, b in mine.items() if not isinstance(b, Cell)},
+                                 {p: b for p, b in mine.items() if isinstance(b, Cell)})
+        c._stop = stop_flag
+
+    # state layout: Euclidean states first so the integrator adds them in one slice
+    specs = []
+    for n, c in comps.items():
+        cs, xd = cstates[n], dstates[n]
+        if cs is not None and xd is not None:
+            raise BuildError(f"{n} ({c.type_name}) declares both continuous and discrete state; split it in two components")
+        if cs is not None and c.rate is not None:
+            raise BuildError(f"{n} ({c.type_name}) has continuous state and a rate; rates are for discrete components")
+        if xd is not None and c.rate is None:
+            raise BuildError(f"{n} ({c.type_name}) has discrete state and needs a rate (Hz) in the assembly")
+        if cs is not None:
+            x0 = np.asarray(cs.x0, dtype=float).ravel()
+            if not np.all(np.isfinite(x0)):
+                raise BuildError(f"{n}: initial state is not finite: {x0}")
+            manifold = c.has_manifold_state() or cs.tangent_size != cs.nx
+            specs.append((manifold, n, c, cs, x0))
+    specs.sort(key=lambda s: s[0])  # stable: Euclidean first, definition order kept
+    nx = sum(s[4].size for s in specs)
+    ndx = sum(s[3].tangent_size for s in specs)
+    X, DX = np.zeros(nx), np.zeros(ndx)
+    slices, x_of, dx_of = [], {}, {}
+    ix = idx = 0
+    n_euclid = 0
+    for manifold, n, c, cs, x0 in specs:
+        sx, sdx = slice(ix, ix + x0.size), slice(idx, idx + cs.tangent_size)
+        X[sx] = x0
+        x_of[n], dx_of[n] = X[sx], DX[sdx]
+        slices.append(StateSlice(c, sx, sdx, cs.second_order, manifold))
+        if not manifold:
+            n_euclid = sx.stop
+        ix, idx = sx.stop, sdx.stop
+    nxd = sum(np.asarray(v).size for v in dstates.values() if v is not None and True)
+    XD = np.zeros(sum(np.asarray(dstates[n]).size for n in comps if dstates[n] is not None))
+    dslices, xd_of = {}, {}
+    i0 = 0
+    for n in comps:
+        if dstates[n] is not None:
+            v = np.asarray(dstates[n], dtype=float).ravel()
+            dslices[n] = slice(i0, i0 + v.size)
+            XD[dslices[n]] = v
+            xd_of[n] = XD[dslices[n]]
+            i0 += v.size
+    del nxd
+
+    # nodes and their order --------------------------------------------------------
+    periods = {n: _period(c, dt) for n, c in comps.items()}
+    nodes: list[Node] = []
+    node_of_port: dict[PortRef, int] = {}
+    for n, c in comps.items():
+        groups: dict[str | None, list[str]] = {}
+        for p, port in c.outputs.items():
+            groups.setdefault(port.calc, []).append(p)
+        for calc, ports in groups.items():
+            deps = sorted({d for p in ports for d in c.outputs[p].feedthrough_inputs(list(c.inputs))},
+                          key=list(c.inputs).index)
+            method = getattr(c, calc) if calc else c.output
+            node = Node(c, method, tuple(ports), tuple(deps), periods[n], c.rate is not None or c.is_sink)
+            for p in ports:
+                node_of_port[PortRef(n, p)] = len(nodes)
+            nodes.append(node)
+    edges: dict[int, list] = defaultdict(list)
+    indeg = [0] * len(nodes)
+    for j, node in enumerate(nodes):
+        for d in node.deps:
+            ref = PortRef(node.comp.name, d)
+            if ref in sources:
+                i = node_of_port[sources[ref]]
+                edges[i].append((j, sources[ref], ref))
+                indeg[j] += 1
+    ready = [j for j in range(len(nodes)) if indeg[j] == 0]
+    order = []
+    while ready:
+        ready.sort()
+        i = ready.pop(0)
+        order.append(i)
+        for j, _, _ in edges.get(i, ()):
+            indeg[j] -= 1
+            if indeg[j] == 0:
+                ready.append(j)
+    if len(order) < len(nodes):
+        rest = [i for i in range(len(nodes)) if i not in set(order)]
+        sub = {i: [e for e in edges.get(i, ()) if e[0] in rest] for i in rest}
+        remap = {i: k for k, i in enumerate(rest)}
+        cyc = _cycle([nodes[i] for i in rest], {remap[i]: [(remap[j], s, d) for j, s, d in sub[i]] for i in rest})
+        raise BuildError(f"algebraic loop (each output feeds through to the next): {cyc}\n"
+                         "break it with a component whose output depends only on its state (a delay, a filter)")
+
+    # which nodes continuous stages must re-evaluate --------------------------------
+    minor_set: set[int] = set()
+    todo = [PortRef(s.comp.name, i) for s in slices for i in s.comp.inputs]
+    seen = set()
+    while todo:
+        ref = todo.pop()
+        if ref in seen or ref not in sources:
+            continue
+        seen.add(ref)
+        j = node_of_port[sources[ref]]
+        if nodes[j].discrete or j in minor_set:
+            continue
+        minor_set.add(j)
+        todo.extend(PortRef(nodes[j].comp.name, d) for d in nodes[j].deps)
+
+    def call(node: Node):
+        n = node.comp.name
+        x = x_of.get(n, xd_of.get(n))
+        return (node.method, x, u_of[n], y_of[n])
+
+    minor = [call(nodes[i]) for i in order if i in minor_set]
+    all_periods = [periods[n] for n in comps]
+    n_phases = 1
+    for p in all_periods:
+        n_phases = n_phases * p // math.gcd(n_phases, p)
+    if n_phases > MAX_PHASES:
+        raise BuildError(f"the component rates need {n_phases} distinct tick patterns (> {MAX_PHASES}); "
+                         f"choose rates whose periods in base steps share factors (periods: {sorted(set(all_periods))})")
+    major = [[call(nodes[i]) for i in order if phase % nodes[i].period == 0] for phase in range(n_phases)]
+    update_comps = [c for n, c in comps.items() if dstates[n] is not None or c.is_sink]
+    updates = [[(c.update, xd_of.get(c.name), u_of[c.name]) for c in update_comps if phase % periods[c.name] == 0]
+               for phase in range(n_phases)]
+    derivs = [(s.comp.derivative, x_of[s.comp.name], u_of[s.comp.name], dx_of[s.comp.name]) for s in slices]
+
+    report = {
+        "components": {n: {"type": c.type_name, "rate_hz": c.rate, "period_steps": periods[n],
+                           "continuous_states": int(x_of[n].size) if n in x_of else 0,
+                           "discrete_states": int(xd_of[n].size) if n in xd_of else 0}
+                       for n, c in comps.items()},
+        "pruned": pruned,
+        "state_size": {"continuous": int(nx), "tangent": int(ndx), "discrete": int(XD.size)},
+        "evaluation_order": [nodes[i].label() for i in order],
+        "continuous_stage_order": [nodes[i].label() for i in order if i in minor_set],
+        "rates_hz": sorted({c.rate for c in comps.values() if c.rate is not None}),
+        "phases": n_phases,
+        "connections": len(sources),
+        "dt": dt,
+    }
+    return Plan(components=comps, pruned=pruned, infos=infos, sources=sources, out_buffers=out_buffers,
+                nodes=[nodes[i] for i in order], minor=minor, major=major, updates=updates, derivs=derivs,
+                n_phases=n_phases, X=X, DX=DX, XD=XD, slices=slices, dslices=dslices, n_euclid_x=n_euclid,
+                stop_flag=stop_flag, dt=dt, report=report)

@@ -1,0 +1,78 @@
+"""Port declarations: class attributes of a component, named by the attribute.
+
+    q   = Input(shape="n", unit="rad")
+    tau = Output(shape="n", unit="N*m", feedthrough=("q_ref", "q"))
+
+``feedthrough`` lists the inputs an output depends on directly (``True`` for
+all, ``()`` for none: a function of state only). The scheduler orders
+evaluations and rejects algebraic loops from it. ``calc`` names a method that
+computes just this output; outputs without one are computed by the
+component's ``output`` method. Splitting state-only outputs from feedthrough
+ones (Drake's per-port calc) is what lets a controller read a body's state and
+drive the same body without a false algebraic loop.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .signals import Numeric, ShapeSpec, Structured
+
+
+class Port:
+    kind = "port"
+
+    def __init__(self, shape: ShapeSpec = (), *, unit: str | None = "1", dtype: Any = np.float64,
+                 type: type | None = None, names=None, doc: str = ""):
+        self.signal = Structured(type) if type is not None else Numeric(shape, dtype, unit, names)
+        self.doc = doc
+        self.name = "?"
+
+    def __set_name__(self, owner, name):
+        self.name = name
+
+    @property
+    def structured(self) -> bool:
+        return isinstance(self.signal, Structured)
+
+    def describe(self) -> str:
+        sig = self.signal
+        if self.structured:
+            return sig.describe()
+        shape = sig.shape if not callable(sig.shape) else "f(params)"
+        return f"{shape} [{sig.unit if sig.unit is not None else 'any'}]"
+
+
+class Input(Port):
+    """An input port. ``required=False`` inputs take ``default`` when unconnected."""
+
+    kind = "input"
+
+    def __init__(self, shape: ShapeSpec = (), *, unit: str | None = "1", dtype: Any = np.float64,
+                 type: type | None = None, names=None, required: bool = True, default: Any = None,
+                 doc: str = ""):
+        super().__init__(shape, unit=unit, dtype=dtype, type=type, names=names, doc=doc)
+        self.required = required and default is None
+        self.default = default
+
+
+class Output(Port):
+    """An output port with its direct-feedthrough declaration."""
+
+    kind = "output"
+
+    def __init__(self, shape: ShapeSpec = (), *, unit: str | None = "1", dtype: Any = np.float64,
+                 type: type | None = None, names=None, feedthrough: bool | tuple[str, ...] = True,
+                 calc: str | None = None, doc: str = ""):
+        super().__init__(shape, unit=unit, dtype=dtype, type=type, names=names, doc=doc)
+        self.feedthrough = feedthrough
+        self.calc = calc
+
+    def feedthrough_inputs(self, input_names: list[str]) -> tuple[str, ...]:
+        if self.feedthrough is True:
+            return tuple(input_names)
+        if self.feedthrough is False:
+            return ()
+        return tuple(self.feedthrough)

@@ -1,0 +1,206 @@
+"""The step loop: major output pass, record, stop checks, discrete updates, integrate.
+
+At each base tick k (t = t0 + k·dt, never accumulated):
+  1. every node due at this tick computes its outputs, in topological order,
+     then the continuous derivatives (they are the integrator's first stage);
+  2. the recorder copies the recorded ports; stop conditions are checked;
+  3. discrete components due at this tick update their state (their outputs,
+     computed in 1, are held until their next tick: zero-order hold);
+  4. the integrator advances the continuous state to t + dt, re-evaluating
+     only the nodes continuous states depend on;
+  5. non-finite state stops the run, naming the component, and keeps the last
+     good state.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .errors import BuildError, SnakesimError
+from .recorder import Recorder
+from .wiring import PortRef, parse_ref
+
+
+@dataclass
+class StopCondition:
+    label: str
+    view: np.ndarray
+    index: np.ndarray | slice
+    op: str
+    value: float
+    reason: str
+
+    def hit(self) -> bool:
+        v = self.view[self.index]
+        if self.op == "above":
+            return bool(np.any(v > self.value))
+        if self.op == "below":
+            return bool(np.any(v < self.value))
+        return bool(np.any(np.abs(v) > self.value))
+
+
+@dataclass
+class RunResult:
+    log: Recorder
+    summary: dict
+    last_good_state: dict | None = None
+    extra: dict = field(default_factory=dict)
+
+    def __getitem__(self, key):
+        return self.log[key]
+
+
+def compile_stops(plan, stops) -> list[StopCondition]:
+    out = []
+    for spec, where in stops:
+        ref = parse_ref(spec.signal, plan.components, "output", where)
+        buf = plan.out_buffers[ref]
+        if not isinstance(buf, np.ndarray):
+            raise BuildError(f"stop condition on {ref} ({where}): only numeric ports can be tested")
+        flat = buf.reshape(-1)
+        if spec.index is None:
+            index = slice(None)
+        else:
+            index = np.atleast_1d(np.asarray(spec.index, dtype=int))
+            if np.any(index >= flat.size) or np.any(index < -flat.size):
+                raise BuildError(f"stop condition on {ref} ({where}): index {spec.index} out of range "
+                                 f"for {flat.size} elements")
+        for op in ("above", "below", "abs_above"):
+            v = getattr(spec, op)
+            if v is not None:
+                label = f"{ref}{'' if spec.index is None else spec.index} {op.replace('_', ' ')} {v:g}"
+                out.append(StopCondition(label, flat, index, op, float(v), spec.reason or label))
+    return out
+
+
+class Simulator:
+    """Runs a compiled :class:`~snakesim.framework.plan.Plan`."""
+
+    def __init__(self, plan, integrator, record: list[PortRef] | None = None, stops=(),
+                 record_rate: float | None = None):
+        self.plan = plan
+        self.integrator = integrator
+        self.record_refs = record or []
+        self.stops = compile_stops(plan, stops)
+        dt = plan.dt
+        if record_rate is None:
+            self.record_every = 1
+        else:
+            n = round(1.0 / (record_rate * dt))
+            if n < 1 or abs(n * record_rate * dt - 1.0) > 1e-6:
+                raise BuildError(f"sim.record_rate {record_rate:g} Hz is not an integer number of base steps "
+                                 f"(dt = {dt:g} s); valid: {1 / dt:g}/k Hz")
+            self.record_every = n
+        if plan.nx:
+            integrator.bind(plan)
+
+    def run(self, duration: float, t0: float = 0.0, progress=None, realtime: bool = False,
+            out_dir: Path | None = None) -> RunResult:
+        plan, integ = self.plan, self.integrator
+        dt = plan.dt
+        n_steps = int(round(duration / dt))
+        if n_steps < 1 or abs(n_steps * dt - duration) > 1e-9 * max(1.0, duration):
+            raise SnakesimError(f"duration {duration:g} s is not a whole number of steps dt = {dt:g} s "
+                                f"(nearest: {max(1, n_steps) * dt:g} s)")
+        log = Recorder(self.record_refs, plan, n_steps // self.record_every + 1)
+        X, XD = plan.X, plan.XD
+        X_good, XD_good = X.copy(), XD.copy()
+        major, updates, derivs = plan.major, plan.updates, plan.derivs
+        n_phases, rec_every = plan.n_phases, self.record_every
+        has_cont = plan.nx > 0
+        stops, flag = self.stops, plan.stop_flag
+        flag.reason = flag.source = None
+        stop_reason, bad = None, None
+        wall0 = time.perf_counter()
+        next_report = wall0 + 0.5
+        t_good = t = t0
+        k = 0
+        for k in range(n_steps + 1):
+            t = t0 + k * dt
+            phase = k % n_phases
+            for fn, x, u, y in major[phase]:
+                fn(t, x, u, y)
+            if has_cont:
+                for fn, x, u, dx in derivs:
+                    fn(t, x, u, dx)
+            if k % rec_every == 0:
+                log.record(t)
+            for cond in stops:
+                if cond.hit():
+                    stop_reason = f"stop condition: {cond.reason} at t = {t:.6g} s"
+                    break
+            if flag.reason is not None:
+                stop_reason = f"{flag.source}: {flag.reason} at t = {t:.6g} s"
+            if stop_reason or k == n_steps:
+                break
+            for fn, xd, u in updates[phase]:
+                fn(t, xd, u)
+            if has_cont:
+                try:
+                    integ.advance(t, t + dt, plan.DX)
+                except FloatingPointError as e:
+                    bad = ("integrator", str(e))
+            if not (np.isfinite(X).all() and np.isfinite(XD).all()):
+                bad = bad or self._offender()
+            if bad:
+                stop_reason = f"non-finite state in component '{bad[0]}' after t = {t:.6g} s ({bad[1]})"
+                break
+            np.copyto(X_good, X)
+            np.copyto(XD_good, XD)
+            t_good = t + dt
+            if progress is not None and (k & 255) == 0:
+                now = time.perf_counter()
+                if now >= next_report:
+                    progress(t, t0 + n_steps * dt)
+                    next_report = now + 0.5
+            if realtime:
+                ahead = (t + dt - t0) - (time.perf_counter() - wall0)
+                if ahead > 0:
+                    time.sleep(ahead)
+        wall = time.perf_counter() - wall0
+        sim_time = (t - t0)
+        summary = {
+            "sim_time_s": sim_time,
+            "wall_time_s": wall,
+            "real_time_factor": sim_time / wall if wall > 0 else float("inf"),
+            "steps": k,
+            "dt_s": dt,
+            "t_end_s": t,
+            "stop_reason": stop_reason or "duration reached",
+            "completed": stop_reason is None,
+            "integrator": {"name": integ.name, **integ.stats} if has_cont else None,
+        }
+        last_good = None
+        if bad:
+            last_good = {"t": t_good, "X": X_good.copy(), "XD": XD_good.copy(),
+                         "components": {s.comp.name: X_good[s.x].copy() for s in plan.slices}}
+            summary["last_good_time_s"] = t_good
+        return RunResult(log, summary, last_good)
+
+    def _offender(self) -> tuple[str, str]:
+        plan = self.plan
+        bad_x = np.flatnonzero(~np.isfinite(plan.X))
+        if bad_x.size:
+            name = plan.component_of_x(int(bad_x[0]))
+            return name, f"{bad_x.size} non-finite continuous state element(s)"
+        bad_d = np.flatnonzero(~np.isfinite(plan.XD))
+        return plan.component_of_xd(int(bad_d[0])), f"{bad_d.size} non-finite discrete state element(s)"
+
+
+def write_run(out_dir: Path, result: RunResult, config_text: str) -> None:
+    """signals.csv, summary.json, config.yaml (+ last_good_state.npz after a blow-up)."""
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    result.log.write_csv(out_dir / "signals.csv")
+    (out_dir / "config.yaml").write_text(config_text)
+    if result.last_good_state is not None:
+        s = result.last_good_state
+        np.savez(out_dir / "last_good_state.npz", t=s["t"], X=s["X"], XD=s["XD"],
+                 **{f"x_{k.replace('/', '__')}": v for k, v in s["components"].items()})
+        result.summary["last_good_state_file"] = "last_good_state.npz"
+    (out_dir / "summary.json").write_text(json.dumps(result.summary, indent=2, default=float) + "\n")

@@ -1,0 +1,1 @@
+"""Robot descriptions: parametric URDF generators, generated URDFs and meshes."""

@@ -1,0 +1,18 @@
+"""Maps the repository's top-level folders onto the `snakesim` namespace.
+
+Everything else lives in pyproject.toml; this file exists only because the
+folder-to-package mapping (framework/ -> snakesim.framework, ...) needs the
+list of subpackages computed, which static pyproject metadata cannot do.
+"""
+
+from setuptools import find_packages, setup
+
+ROOTS = ["framework", "components", "assemblies", "robots", "terrains", "configs"]
+
+packages, package_dir = [], {}
+for root in ROOTS:
+    package_dir[f"snakesim.{root}"] = root
+    packages.append(f"snakesim.{root}")
+    packages += [f"snakesim.{root}.{sub}" for sub in find_packages(root)]
+
+setup(packages=packages, package_dir=package_dir)

@@ -1,0 +1,1 @@
+"""Terrain definitions and assets (YAML, DEMs, meshes)."""
