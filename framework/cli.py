@@ -1,0 +1,163 @@
+"""The ``snakesim`` command line (click), in the spirit of the paper's Dclick.
+
+Options have no click defaults: an option left out never hides a value from a
+config file. Precedence, later wins: Params defaults < assembly < each
+``--config`` file < each ``--set`` < explicit flags (``--dt``, ``--duration``,
+``--integrator``, ``--realtime``).
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import click
+
+from .errors import SnakesimError
+from .registry import default_registry
+from .session import load_session
+
+
+def _fail(e: Exception):
+    raise click.ClickException(str(e))
+
+
+def _progress(stream=sys.stderr):
+    def report(t, t_end):
+        frac = min(1.0, t / t_end) if t_end else 1.0
+        bar = "#" * int(30 * frac)
+        stream.write(f"\r  [{bar:<30}] {100 * frac:5.1f}%  t = {t:.2f} / {t_end:.2f} s")
+        stream.flush()
+    return report
+
+
+def _session(assembly, config, sets, **sim):
+    reg = default_registry()
+    if assembly is None:
+        assembly = reg.default_assembly()
+    return load_session(assembly, config_files=config, overrides=sets, sim_overrides=sim, registry=reg)
+
+
+def _positive(ctx, param, value):
+    if value is not None and value <= 0:
+        raise click.BadParameter(f"must be > 0, got {value:g}")
+    return value
+
+
+def scene_options(f):
+    f = click.option("--set", "sets", multiple=True, metavar="KEY.PATH=VALUE",
+                     help="Deep override, e.g. components.pend.params.length=2 or a parameter: damping=0.1.")(f)
+    f = click.option("--config", "config", multiple=True, type=click.Path(dir_okay=False),
+                     help="Config file merged over the assembly (repeatable; later wins).")(f)
+    return f
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+def cli():
+    """snakesim: a dataflow simulator for snake robots (and anything else built from components)."""
+
+
+@cli.command()
+@click.argument("assembly", required=False)
+@scene_options
+@click.option("--duration", type=float, callback=_positive, help="Simulated time, s.")
+@click.option("--dt", type=float, callback=_positive, help="Base step, s.")
+@click.option("--integrator", help="semi_implicit_euler, rk4, dopri5, rosenbrock2 or a plugin's.")
+@click.option("--realtime/--no-realtime", default=None, help="Pace simulated time to the wall clock.")
+@click.option("--out", "out_dir", type=click.Path(file_okay=False), help="Write signals.csv, summary.json, config.yaml here.")
+@click.option("--save-config", type=click.Path(dir_okay=False), help="Write the full resolved configuration here.")
+@click.option("--quiet", is_flag=True, help="No progress or summary on the terminal.")
+def run(assembly, config, sets, duration, dt, integrator, realtime, out_dir, save_config, quiet):
+    """Run ASSEMBLY (a YAML path or a scene name; default: the default scene)."""
+    try:
+        s = _session(assembly, config, sets, duration=duration, dt=dt, integrator=integrator, realtime=realtime)
+        if save_config:
+            Path(save_config).write_text(s.config_text())
+        if not quiet:
+            click.echo(f"running {s.resolved.source}: {s.resolved.sim.duration:g} s at dt = {s.resolved.sim.dt:g} s "
+                       f"with {s.integrator.name}", err=True)
+        result = s.run(out_dir=out_dir, progress=None if quiet else _progress())
+    except SnakesimError as e:
+        _fail(e)
+    if not quiet:
+        sm = result.summary
+        click.echo(f"\r{' ' * 70}\r{sm['stop_reason']}: {sm['sim_time_s']:.4g} s simulated in {sm['wall_time_s']:.3g} s "
+                   f"({sm['real_time_factor']:.3g}x real time, {sm['steps']} steps)", err=True)
+        if out_dir:
+            click.echo(f"wrote {out_dir}/signals.csv, summary.json, config.yaml", err=True)
+    if not result.summary["completed"] and "non-finite" in result.summary["stop_reason"]:
+        sys.exit(3)
+
+
+@cli.command()
+@click.argument("assembly", required=False)
+@scene_options
+@click.option("--json", "as_json", is_flag=True, help="Machine-readable report.")
+def check(assembly, config, sets, as_json):
+    """Build ASSEMBLY and report it without running."""
+    try:
+        s = _session(assembly, config, sets)
+    except SnakesimError as e:
+        _fail(e)
+    r = s.report()
+    if as_json:
+        click.echo(json.dumps(r, indent=2))
+        return
+    click.echo(f"{r['source']}: {len(r['components'])} components, {r['connections']} connections")
+    for n, c in r["components"].items():
+        rate = f"{c['rate_hz']:g} Hz" if c["rate_hz"] else "continuous"
+        click.echo(f"  {n:<28} {c['type']:<22} {rate:<12} x={c['continuous_states']} xd={c['discrete_states']}")
+    click.echo(f"pruned (outputs reach no state, recorder or sink): {', '.join(r['pruned']) or 'none'}")
+    st = r["state_size"]
+    click.echo(f"state: {st['continuous']} continuous ({st['tangent']} tangent), {st['discrete']} discrete; "
+               f"dt = {r['dt']:g} s, integrator {r['integrator']}")
+    click.echo("evaluation order: " + " -> ".join(r["evaluation_order"]))
+
+
+@cli.command()
+@click.option("--json", "as_json", is_flag=True)
+@click.option("--markdown", is_flag=True, help="The component reference as Markdown (docs/components.md).")
+def components(as_json, markdown):
+    """List every registered component with its ports, units and params."""
+    from .reference import component_reference, reference_markdown
+
+    ref = component_reference(default_registry())
+    if as_json:
+        click.echo(json.dumps(ref, indent=2))
+    elif markdown:
+        click.echo(reference_markdown(ref), nl=False)
+    else:
+        for name, c in ref.items():
+            click.echo(f"{name}  ({c['class']}, from {c['module']})")
+            for p in c["inputs"]:
+                click.echo(f"    in   {p['name']:<14} {p['signal']}{'' if p['required'] else '  (optional)'}")
+            for p in c["outputs"]:
+                click.echo(f"    out  {p['name']:<14} {p['signal']}  feedthrough: {p['feedthrough'] or 'none'}")
+            for p in c["params"]:
+                click.echo(f"    par  {p['name']:<14} = {p['default']!r}  {p['type']}")
+
+
+@cli.command()
+@click.argument("assembly", required=False)
+@scene_options
+@click.option("-o", "--output", "output", required=True, type=click.Path(dir_okay=False),
+              help="Picture file: .svg or .png.")
+def graph(assembly, config, sets, output):
+    """Draw ASSEMBLY's dataflow graph as an SVG or PNG picture."""
+    from .dataflow_picture import draw
+
+    if Path(output).suffix.lower() not in (".svg", ".png"):
+        raise click.BadParameter(f"'{output}': the picture must end in .svg or .png", param_hint="-o")
+    try:
+        s = _session(assembly, config, sets)
+        draw(s, Path(output))
+    except SnakesimError as e:
+        _fail(e)
+    click.echo(f"wrote {output}", err=True)
+
+
+def main():
+    reg = default_registry()
+    reg.pm.hook.snakesim_add_commands(cli=cli)
+    cli(prog_name="snakesim")

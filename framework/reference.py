@@ -1,0 +1,54 @@
+"""The component reference, generated from the registry so it never goes stale."""
+
+from __future__ import annotations
+
+import inspect
+
+
+def _signal(port) -> str:
+    return port.describe()
+
+
+def component_reference(registry) -> dict:
+    out = {}
+    for name in sorted(registry.components):
+        cls = registry.components[name]
+        doc = inspect.getdoc(cls) or inspect.getdoc(inspect.getmodule(cls)) or ""
+        params = []
+        for pname, f in cls.Params.model_fields.items():
+            default = f.get_default(call_default_factory=True)
+            params.append({"name": pname, "type": getattr(f.annotation, "__name__", str(f.annotation)),
+                           "default": default, "description": f.description or ""})
+        out[name] = {
+            "class": cls.__qualname__, "module": cls.__module__,
+            "summary": doc.strip().splitlines()[0] if doc.strip() else "",
+            "inputs": [{"name": n, "signal": _signal(p), "required": p.required, "doc": p.doc}
+                       for n, p in cls.inputs.items()],
+            "outputs": [{"name": n, "signal": _signal(p),
+                         "feedthrough": list(p.feedthrough_inputs(list(cls.inputs))), "doc": p.doc}
+                        for n, p in cls.outputs.items()],
+            "params": params,
+            "sink": cls.is_sink,
+        }
+    return out
+
+
+def reference_markdown(ref: dict) -> str:
+    lines = ["# Component reference", "",
+             "Generated from the registry by `snakesim components --markdown`; do not edit by hand.", ""]
+    for name, c in ref.items():
+        lines += [f"## `{name}`", "", c["summary"], "", f"`{c['module']}.{c['class']}`", ""]
+        if c["inputs"] or c["outputs"]:
+            lines += ["| port | direction | signal | notes |", "|---|---|---|---|"]
+            for p in c["inputs"]:
+                lines.append(f"| `{p['name']}` | in | {p['signal']} | {'required' if p['required'] else 'optional'} |")
+            for p in c["outputs"]:
+                ft = ", ".join(p["feedthrough"]) or "none (state only)"
+                lines.append(f"| `{p['name']}` | out | {p['signal']} | feedthrough: {ft} |")
+            lines.append("")
+        if c["params"]:
+            lines += ["| parameter | type | default | description |", "|---|---|---|---|"]
+            for p in c["params"]:
+                lines.append(f"| `{p['name']}` | {p['type']} | `{p['default']!r}` | {p['description']} |")
+            lines.append("")
+    return "\n".join(lines) + "\n"
