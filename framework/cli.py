@@ -32,8 +32,10 @@ def _progress(stream=sys.stderr):
     return report
 
 
-def _session(assembly, config, sets, **sim):
+def _session(assembly, config, sets, shorthands=None, **sim):
     reg = default_registry()
+    # shorthand options (--robot, --modules, ...) are --set items, placed before the explicit ones
+    sets = [f"{key}={value}" for key, value in (shorthands or {}).items() if value is not None] + list(sets)
     if assembly is None:
         assembly = reg.default_assembly()
     return load_session(assembly, config_files=config, overrides=sets, sim_overrides=sim, registry=reg)
@@ -68,10 +70,10 @@ def cli():
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), help="Write signals.csv, summary.json, config.yaml here.")
 @click.option("--save-config", type=click.Path(dir_okay=False), help="Write the full resolved configuration here.")
 @click.option("--quiet", is_flag=True, help="No progress or summary on the terminal.")
-def run(assembly, config, sets, duration, dt, integrator, realtime, out_dir, save_config, quiet):
+def run(assembly, config, sets, duration, dt, integrator, realtime, out_dir, save_config, quiet, **shorthands):
     """Run ASSEMBLY (a YAML path or a scene name; default: the default scene)."""
     try:
-        s = _session(assembly, config, sets, duration=duration, dt=dt, integrator=integrator, realtime=realtime)
+        s = _session(assembly, config, sets, _shorthand_keys(shorthands), duration=duration, dt=dt, integrator=integrator, realtime=realtime)
         if save_config:
             Path(save_config).write_text(s.config_text())
         if not quiet:
@@ -94,10 +96,10 @@ def run(assembly, config, sets, duration, dt, integrator, realtime, out_dir, sav
 @click.argument("assembly", required=False)
 @scene_options
 @click.option("--json", "as_json", is_flag=True, help="Machine-readable report.")
-def check(assembly, config, sets, as_json):
+def check(assembly, config, sets, as_json, **shorthands):
     """Build ASSEMBLY and report it without running."""
     try:
-        s = _session(assembly, config, sets)
+        s = _session(assembly, config, sets, _shorthand_keys(shorthands))
     except SnakesimError as e:
         _fail(e)
     r = s.report()
@@ -143,21 +145,43 @@ def components(as_json, markdown):
 @scene_options
 @click.option("-o", "--output", "output", required=True, type=click.Path(dir_okay=False),
               help="Picture file: .svg or .png.")
-def graph(assembly, config, sets, output):
+def graph(assembly, config, sets, output, **shorthands):
     """Draw ASSEMBLY's dataflow graph as an SVG or PNG picture."""
     from .dataflow_picture import draw
 
     if Path(output).suffix.lower() not in (".svg", ".png"):
         raise click.BadParameter(f"'{output}': the picture must end in .svg or .png", param_hint="-o")
     try:
-        s = _session(assembly, config, sets)
+        s = _session(assembly, config, sets, _shorthand_keys(shorthands))
         draw(s, Path(output))
     except SnakesimError as e:
         _fail(e)
     click.echo(f"wrote {output}", err=True)
 
 
-def main():
-    reg = default_registry()
+_SHORTHANDS: dict[str, str] = {}
+
+
+def _shorthand_keys(values: dict) -> dict:
+    return {_SHORTHANDS[name]: v for name, v in values.items() if name in _SHORTHANDS}
+
+
+def install_plugin_cli(registry=None) -> click.Group:
+    """Add plugins' commands and shorthand options (``--robot`` -> ``--set robot.name``) once."""
+    if getattr(cli, "_plugins_installed", False):
+        return cli
+    reg = registry or default_registry()
     reg.pm.hook.snakesim_add_commands(cli=cli)
+    for group in reg.pm.hook.snakesim_cli_shorthands():
+        for option, key, help_text in group:
+            name = option.lstrip("-").replace("-", "_")
+            _SHORTHANDS[name] = key
+            for cmd in (run, check, graph):
+                cmd.params.append(click.Option([option, name], default=None, help=f"{help_text} (= --set {key}=…)"))
+    cli._plugins_installed = True
+    return cli
+
+
+def main():
+    install_plugin_cli()
     cli(prog_name="snakesim")

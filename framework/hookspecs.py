@@ -29,3 +29,8 @@ def snakesim_default_assembly():
 @hookspec
 def snakesim_add_commands(cli):
     """Add click commands to the ``snakesim`` command group."""
+
+
+@hookspec
+def snakesim_cli_shorthands():
+    """Return ``(option, key.path, help)`` triples: ``--option V`` means ``--set key.path=V``."""

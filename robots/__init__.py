@@ -1,1 +1,37 @@
-"""Robot descriptions: parametric URDF generators, generated URDFs and meshes."""
+"""Robot descriptions: parametric URDF generators, generated URDFs and meshes.
+
+The EELS snake-robot family of the EELS-DARTS paper (section 2.1.2) as
+parametric generators with systematic dm_control-style names (``module_03``,
+``bend_03``, ``twist_03``, ``screw_front_03``, ...). Topologies, frames and
+the DOF formulas are documented in :mod:`snakesim.robots.designs`.
+
+Public API::
+
+    load_robot(design, modules=None, head=None, urdf=None, **params) -> RobotDescription
+    generate_robot(design, modules=None, head=None, **params) -> RobotDescription
+    write_robot(description, root, name=None) -> Path
+    DESIGNS  # name -> Design
+
+Committed files (default parameters): ``urdf/<design>.urdf`` with its
+``urdf/<design>.yaml`` metadata sidecar, and ``meshes/screw_*.stl``;
+regenerate them with ``python -m snakesim.robots.generate``.
+"""
+
+from .description import RobotDescription, generate_robot, metadata_yaml, write_robot
+from .designs import DESIGNS, Design, UnknownDesignError, get_design
+from .loader import load_robot
+from .structure import StructureMismatchError, URDFError
+
+__all__ = [
+    "DESIGNS",
+    "Design",
+    "RobotDescription",
+    "StructureMismatchError",
+    "URDFError",
+    "UnknownDesignError",
+    "generate_robot",
+    "get_design",
+    "load_robot",
+    "metadata_yaml",
+    "write_robot",
+]
