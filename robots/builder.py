@@ -39,7 +39,7 @@ from .designs import Design
 from .kinematic_tree import (
     Box, Joint, KinematicTree, Limit, Link, Material, Mesh, Mimic, Pose, Shape, Sphere, cylinder_along_x,
 )
-from .mass_properties import MassProperties, solid_box, solid_cylinder_x, tube_x
+from .mass_properties import MassProperties, is_physical, solid_box, solid_cylinder_x, tube_x
 from .parameters import RobotParameters
 from .screw_mesh import ScrewGeometry
 
@@ -169,6 +169,10 @@ class _Builder:
             self._perception_head(parent, attach_x)
         elif self.design.head == "cap" and self.params.head:
             self._head_cap(parent, attach_x)
+        for link in self.tree.links:  # guards edits to the nominal numbers, e.g. a zero mass
+            m = link.inertial
+            if m is not None and not is_physical(m.mass, m.tensor()):
+                raise ValueError(f"{self.design.name}: link {link.name!r} has unphysical mass properties {m}")
         return BuiltRobot(self.tree, self._metadata(), self.screw_meshes)
 
     def _module(self, i: int, parent: str, attach_x: float) -> tuple[str, float]:
@@ -256,6 +260,7 @@ class _Builder:
             "core_radius": g.core_radius,
             "length": g.screw_length,
             "starts": self.design.dimensions.screw_starts,
+            "blade_thickness": self.design.dimensions.blade_thickness,
             "axis": "x",
             "mimic": {"joint": mimic.joint, "multiplier": mimic.multiplier, "offset": mimic.offset} if mimic else None,
             "visual_mesh": MESH_PREFIX + mesh_file,
@@ -345,7 +350,7 @@ class _Builder:
             cross_bar = {"link": naming.CROSS_BAR, "joint": naming.CROSS_BAR_JOINT,
                          "avionics_link": naming.AVIONICS_BOX, "avionics_joint": naming.AVIONICS_BOX_JOINT,
                          "after_module": p.modules // 2 - 1}
-        return {
+        return _tidy({
             "design": d.name,
             "title": d.title,
             "module_count": p.modules,
@@ -359,12 +364,23 @@ class _Builder:
             "force_torque_sensors": self.meta_fts,
             "head": head,
             "cross_bar": cross_bar,
-        }
+        })
 
 
 def build_robot(design: Design, params: RobotParameters) -> BuiltRobot:
     """Kinematic tree, metadata and referenced screw meshes of ``design``."""
     return _Builder(design, params).build()
+
+
+def _tidy(value: Any) -> Any:
+    """Round floats to 12 decimals so the YAML reads 0.15, not 0.15000000000000002."""
+    if isinstance(value, float):
+        return round(value, 12)
+    if isinstance(value, dict):
+        return {k: _tidy(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_tidy(v) for v in value]
+    return value
 
 
 def _other_hand(hand: str) -> str:

@@ -289,7 +289,10 @@ def get_design(name: str) -> Design:
         return DESIGNS[name]
     except (KeyError, TypeError):
         pass
-    close = difflib.get_close_matches(str(name), list(DESIGNS), n=3, cutoff=0.5)
+    query = str(name).strip().lower()
+    close = difflib.get_close_matches(query, list(DESIGNS), n=3, cutoff=0.5)
+    # a fragment such as "mini" or "1.5" is too short for difflib's ratio
+    close += [d for d in DESIGNS if query and query in d and d not in close]
     hint = f" Did you mean {', '.join(repr(c) for c in close)}?" if close else ""
     raise UnknownDesignError(
         f"unknown robot design {name!r}.{hint} Valid designs: {', '.join(DESIGNS)}"

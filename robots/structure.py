@@ -97,12 +97,13 @@ def parse_structure(text: str, source: str = "<urdf>") -> UrdfStructure:
         mimic_joint = mimic.get("joint") if mimic is not None else None
         missing = [
             what for what, ok in (
-                ("a name", bool(name)), ("a type", bool(jtype)), ("<parent link=...>", bool(parent_link)),
-                ("<child link=...>", bool(child_link)), ("a joint to mimic", mimic is None or bool(mimic_joint)),
+                ("name attribute", bool(name)), ("type attribute", bool(jtype)),
+                ("<parent link=...>", bool(parent_link)), ("<child link=...>", bool(child_link)),
+                ("<mimic joint=...>", mimic is None or bool(mimic_joint)),
             ) if not ok
         ]
         if missing:
-            problems.append(f"{label} has no {', no '.join(missing)}")
+            problems.append(f"{label} lacks {', '.join(missing)}")
             continue
         if jtype not in URDF_JOINT_TYPES:
             problems.append(f"{label} has unknown type {jtype!r} (URDF types: {', '.join(URDF_JOINT_TYPES)})")
@@ -137,7 +138,7 @@ def read_urdf(path: str | Path) -> str:
     """Text of the URDF file at ``path``; errors name the file."""
     path = Path(path)
     if not path.exists():
-        raise FileNotFoundError(2, f"URDF file not found: {path}", str(path))
+        raise FileNotFoundError(f"URDF file not found: {path}")
     if path.is_dir():
         raise URDFError(f"{path}: is a folder, expected a URDF file")
     try:
