@@ -6,12 +6,15 @@ point in the ``snakesim`` group (see docs/plugins.md).
 
 from snakesim.framework import hookimpl
 
+from .contact.friction_fit_cli import snakesim_add_commands  # noqa: F401  (hookimpl: `snakesim fit-friction`)
+from .contact.point_contact import PointContact
 from .examples.mass_spring import PointMass, SpringDamper
 from .examples.pendulum import Pendulum, ViscousDamper
 from .signals.blocks import Gain, Sum, ZeroOrderHold
 from .signals.sources import Constant, Sine, Step
 
-BUILTIN = (Constant, Step, Sine, Gain, Sum, ZeroOrderHold, Pendulum, ViscousDamper, PointMass, SpringDamper)
+BUILTIN = (Constant, Step, Sine, Gain, Sum, ZeroOrderHold, Pendulum, ViscousDamper, PointMass, SpringDamper,
+           PointContact)
 
 
 @hookimpl

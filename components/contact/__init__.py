@@ -1,0 +1,16 @@
+"""Screw–terrain contact (paper §2.2.2): penalty normal force, isotropic and anisotropic
+friction kernels (numpy and numba), screw contact samples, the analytic screw-pair steady
+speed, and the fig. 6 friction fit (``snakesim fit-friction``)."""
+
+from .kernels import (anisotropic_friction, contact_forces, ev_magnitude, isotropic_friction, normal_force,
+                      slip_direction, tangent_axis, tangential_velocity)
+from .kernels_numba import body_wrenches_nb, contact_forces_nb, contact_forces_numba
+from .materials import FrictionMaterial
+from .point_contact import PointContact, PointContactParams
+from .screw_samples import ScrewContactSamples, body_wrench, body_wrenches, thread_direction
+from .steady_state import steady_axial_speed
+
+__all__ = ["anisotropic_friction", "contact_forces", "ev_magnitude", "isotropic_friction", "normal_force",
+           "slip_direction", "tangent_axis", "tangential_velocity", "contact_forces_nb", "contact_forces_numba",
+           "body_wrenches_nb", "FrictionMaterial", "PointContact", "PointContactParams", "ScrewContactSamples", "body_wrench", "body_wrenches",
+           "thread_direction", "steady_axial_speed"]
