@@ -1,0 +1,175 @@
+"""Imported meshes (OBJ, STL, PLY via trimesh) as a signed-distance grid.
+
+The mesh is converted once into an SDF sampled on a regular grid (libigl's
+pseudonormal signed distance: measured 27 s for 128³ nodes of an
+82k-triangle mesh, where trimesh's own would take tens of minutes) and cached in the terrain store by
+the sha256 of the file bytes + grid parameters. Queries interpolate the grid
+trilinearly (error ≲ h near smooth surfaces, larger at sharp edges) and the
+normal is the normalised gradient of that interpolant (so it is ∇d exactly,
+cell-wise).
+
+``inside``: ``solid`` (default) — the mesh encloses ice, free space is
+outside it; ``free`` — the mesh encloses the cavity (a closed tunnel scan),
+free space is inside. A mesh that is not watertight is rejected unless
+``open_surface`` is set, in which case the sign comes from the face
+orientation (pseudonormal) and is only meaningful near the surface.
+Outside the grid box: d = d(nearest grid point) + the distance to the box
+when that is positive, else d(nearest grid point).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numba
+import numpy as np
+
+from snakesim.framework import ConfigError
+
+from . import store as _store
+from .base import Bounds, Terrain
+
+MESH_SUFFIXES = (".obj", ".stl", ".ply")
+SDF_VERSION = 1   # bump when the grid computation changes (invalidates the store)
+#: incremented by every grid computation (tests check the cache with it)
+compute_count = 0
+
+
+def compute_sdf_grid(vertices: np.ndarray, faces: np.ndarray, lo: np.ndarray, h: float,
+                     shape: tuple[int, int, int]) -> np.ndarray:
+    """Signed distance (negative inside the mesh) at the grid nodes lo + h·(i, j, k), shape (nx, ny, nz)."""
+    global compute_count
+    compute_count += 1
+    axes = [lo[a] + h * np.arange(shape[a]) for a in range(3)]
+    pts = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+    try:
+        import igl
+    except ImportError:   # slow fallback (trimesh: positive inside, hence the minus)
+        import trimesh
+        mesh = trimesh.Trimesh(vertices, faces, process=False)
+        s = -trimesh.proximity.signed_distance(mesh, pts)
+    else:
+        s = igl.signed_distance(pts, np.ascontiguousarray(vertices, dtype=np.float64),
+                                np.ascontiguousarray(faces, dtype=np.int64),
+                                sign_type=igl.SIGNED_DISTANCE_TYPE_PSEUDONORMAL)[0]
+    return np.asarray(s, dtype=np.float64).reshape(shape)
+
+
+def load_mesh(path: str | Path):
+    path = Path(path)
+    if not path.is_file():
+        raise ConfigError("mesh file not found", str(path))
+    if path.suffix.lower() not in MESH_SUFFIXES:
+        raise ConfigError(f"unsupported mesh format '{path.suffix}'; use one of {', '.join(MESH_SUFFIXES)}", str(path))
+    import trimesh
+    try:
+        mesh = trimesh.load(path, force="mesh")
+    except Exception as e:
+        raise ConfigError(f"cannot read mesh: {e}", str(path)) from None
+    if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
+        raise ConfigError("file holds no triangles", str(path))
+    return mesh
+
+
+class SdfGrid(Terrain):
+    """Signed distance sampled at nodes lo + h·(i, j, k); values[i, j, k], > 0 in free space."""
+
+    kind = "mesh"
+    regions = ("surface",)
+
+    def __init__(self, values: np.ndarray, lo, h: float, source: str = "<grid>", **kw):
+        super().__init__(**kw)
+        self.values = np.ascontiguousarray(values, dtype=np.float64)
+        self.lo, self.h = np.asarray(lo, dtype=np.float64), float(h)
+        self.hi = self.lo + self.h * (np.array(self.values.shape) - 1)
+        self.source = source
+
+    def _query(self, p):
+        d = np.empty(len(p))
+        n = np.empty((len(p), 3))
+        _trilinear(self.values, self.lo, self.h, np.ascontiguousarray(p), d, n)
+        return d, n, np.zeros(len(p), dtype=np.int64)
+
+    def bounds(self):
+        return Bounds(self.lo.copy(), self.hi.copy())
+
+
+# numba vs the equivalent vectorised numpy (measured, 128³ grid, same results):
+# 30 points 1.1 µs vs 62 µs per call; 30 000 points 1.2 ms vs 9.2 ms.
+@numba.njit(cache=True)
+def _trilinear(v, lo, h, p, d_out, n_out):
+    nx, ny, nz = v.shape
+    dims = (nx, ny, nz)
+    idx = np.empty(3, np.int64)
+    t = np.empty(3)
+    for q in range(p.shape[0]):
+        outside2 = 0.0
+        for a in range(3):
+            fa = (p[q, a] - lo[a]) / h
+            if fa < 0.0:
+                outside2 += (fa * h) ** 2
+                fa = 0.0
+            elif fa > dims[a] - 1:
+                outside2 += ((fa - (dims[a] - 1)) * h) ** 2
+                fa = dims[a] - 1.0
+            i = min(int(fa), dims[a] - 2)
+            idx[a] = i
+            t[a] = fa - i
+        i, j, k = idx[0], idx[1], idx[2]
+        tx, ty, tz = t[0], t[1], t[2]
+        c000, c100 = v[i, j, k], v[i + 1, j, k]
+        c010, c110 = v[i, j + 1, k], v[i + 1, j + 1, k]
+        c001, c101 = v[i, j, k + 1], v[i + 1, j, k + 1]
+        c011, c111 = v[i, j + 1, k + 1], v[i + 1, j + 1, k + 1]
+        c00 = c000 + tx * (c100 - c000)
+        c10 = c010 + tx * (c110 - c010)
+        c01 = c001 + tx * (c101 - c001)
+        c11 = c011 + tx * (c111 - c011)
+        c0 = c00 + ty * (c10 - c00)
+        c1 = c01 + ty * (c11 - c01)
+        dval = c0 + tz * (c1 - c0)
+        # gradient of the trilinear interpolant
+        gx = ((1 - ty) * (1 - tz) * (c100 - c000) + ty * (1 - tz) * (c110 - c010)
+              + (1 - ty) * tz * (c101 - c001) + ty * tz * (c111 - c011)) / h
+        gy = ((1 - tz) * (c10 - c00) + tz * (c11 - c01)) / h
+        gz = (c1 - c0) / h
+        g = np.sqrt(gx * gx + gy * gy + gz * gz)
+        if g > 1e-12:
+            n_out[q, 0], n_out[q, 1], n_out[q, 2] = gx / g, gy / g, gz / g
+        else:
+            n_out[q, 0], n_out[q, 1], n_out[q, 2] = 0.0, 0.0, 1.0
+        if outside2 > 0.0 and dval > 0.0:
+            dval += np.sqrt(outside2)
+        d_out[q] = dval
+
+
+def mesh_terrain(path: str | Path, cells: int = 128, resolution: float | None = None, padding: float = 0.1,
+                 inside: str = "solid", open_surface: bool = False, store=None, **kw) -> SdfGrid:
+    """Load a mesh file and return its SDF grid terrain (from the store when cached)."""
+    path = Path(path)
+    mesh = load_mesh(path)
+    if not open_surface and not mesh.is_watertight:
+        raise ConfigError("mesh is not watertight, so inside/outside is undefined; repair it (holes, "
+                          "non-manifold edges) or set 'open_surface: true' to sign by face orientation",
+                          str(path))
+    if inside not in ("solid", "free"):
+        raise ConfigError(f"inside must be 'solid' or 'free', got {inside!r}", str(path), "inside")
+    lo_m, hi_m = mesh.bounds
+    lo = lo_m - padding
+    ext = (hi_m + padding) - lo
+    h = float(resolution) if resolution is not None else float(ext.max() / cells)
+    if not h > 0:
+        raise ConfigError(f"grid resolution must be > 0 m, got {h}", str(path), "resolution")
+    shape = tuple(int(np.ceil(e / h)) + 1 for e in ext)
+    params = {"v": SDF_VERSION, "lo": lo.round(12).tolist(), "h": h, "shape": shape,
+              "open": bool(open_surface)}
+    key = _store.content_key(path.read_bytes(), params)
+    entry = _store.load_entry(key, store)
+    if entry is None:
+        values = compute_sdf_grid(np.asarray(mesh.vertices), np.asarray(mesh.faces), lo, h, shape)
+        _store.save_entry(key, {"values": values, "lo": lo, "h": np.array(h)}, store)
+    else:
+        values = entry["values"]
+    if inside == "free":
+        values = -values
+    return SdfGrid(values, lo, h, source=str(path), **kw)

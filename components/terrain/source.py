@@ -1,0 +1,35 @@
+"""Terrain source: loads a terrain once and offers it to contact models.
+
+params  name   terrain name in terrains/ or a path (YAML or OBJ/STL/PLY)
+        spec   inline definition (a terrain YAML mapping); overrides name
+        store  terrain-store folder for mesh SDF grids (default: see store.py)
+out     terrain  structured Terrain (no inputs, no state)
+"""
+
+from __future__ import annotations
+
+from pydantic import Field
+
+from snakesim.framework import Component, Output, Params
+
+from .base import Terrain
+from .spec import load_terrain
+
+
+class TerrainSourceParams(Params):
+    name: str = Field("flat-ice", description="terrain name or path")
+    spec: dict | None = Field(None, description="inline terrain definition")
+    store: str | None = Field(None, description="terrain store folder")
+
+
+class TerrainSource(Component[TerrainSourceParams]):
+    type_name = "terrain"
+    Params = TerrainSourceParams
+    terrain = Output(type=Terrain, feedthrough=(), doc="the terrain query object")
+
+    def setup(self):
+        p = self.p
+        self._terrain = load_terrain(p.spec if p.spec is not None else p.name, store=p.store)
+
+    def output(self, t, x, u, y):
+        y.terrain = self._terrain

@@ -1,0 +1,298 @@
+"""YAML terrain definitions: pydantic schema (``kind:`` discriminator) and :func:`load_terrain`.
+
+    kind: u_channel            # plane | dem | tube | parallel_walls | u_channel | moulin | mesh
+    width: 0.4
+    materials:                 # first one is the default of every region
+      - {name: ice, k: 2.0e5, c: 500, mu: 0.1}
+      - {name: rock, k: 1.0e6, c: 2000, mu: 0.6}
+    regions: {floor: rock}     # region -> material name (regions per kind: see each class)
+
+Files named in a definition (DEM grids, meshes) are relative to the YAML file.
+"""
+
+from __future__ import annotations
+
+import difflib
+from importlib.resources import files
+from pathlib import Path
+from typing import Annotated, Literal, Union
+
+from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError, model_validator
+
+from snakesim.framework import ConfigError
+from snakesim.framework.yaml_source import load_yaml
+
+from . import analytic, dem, mesh
+from .base import Material, Terrain
+
+Vec3 = tuple[float, float, float]
+
+
+class _Model(BaseModel):
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+
+class MaterialSpec(_Model):
+    name: str = "ice"
+    k: float = Field(1.0e5, gt=0, description="contact stiffness, N/m")
+    c: float = Field(1.0e3, ge=0, description="contact damping, N·s/m")
+    mu: float = Field(0.3, ge=0, description="friction coefficient")
+    ev_a: float = Field(1.0, description="||e_v|| = ev_a + ev_b·F_n")
+    ev_b: float = Field(0.0, description="1/N")
+
+
+class _Base(_Model):
+    description: str = ""
+    materials: list[MaterialSpec] = Field(default_factory=lambda: [MaterialSpec()], min_length=1)
+    regions: dict[str, str] = Field(default_factory=dict, description="region -> material name")
+
+    @model_validator(mode="after")
+    def _unique_materials(self):
+        names = [m.name for m in self.materials]
+        dup = {n for n in names if names.count(n) > 1}
+        if dup:
+            raise ValueError(f"duplicate material name(s) {sorted(dup)}")
+        return self
+
+
+class RoughnessSpec(_Model):
+    """Seeded Fourier perturbation of a cylinder's radius (see analytic.py)."""
+
+    rms: float = Field(0.01, ge=0, description="m")
+    n_modes: int = Field(12, ge=0)
+    wavelength_min: float = Field(0.2, gt=0, description="axial, m")
+    wavelength_max: float = Field(2.0, gt=0, description="axial, m")
+    m_min: int = Field(1, ge=0, description="lowest angular order")
+    m_max: int = Field(6, ge=0, description="highest angular order")
+    hurst: float = Field(0.8, ge=0, le=1)
+    seed: int = 0
+
+    @model_validator(mode="after")
+    def _ranges(self):
+        if self.wavelength_min > self.wavelength_max or self.m_min > self.m_max:
+            raise ValueError("need wavelength_min <= wavelength_max and m_min <= m_max")
+        return self
+
+    def modes(self):
+        return analytic.fourier_modes(self.seed, self.n_modes, self.rms, self.wavelength_min,
+                                      self.wavelength_max, self.m_min, self.m_max, self.hurst)
+
+
+class PlaneSpec(_Base):
+    kind: Literal["plane"]
+    origin: Vec3 = (0.0, 0.0, 0.0)
+    tilt: float = Field(0.0, description="rad, slope of the plane")
+    azimuth: float = Field(0.0, description="rad, direction (from +x) in which it rises")
+
+
+class TubeSpec(_Base):
+    kind: Literal["tube"]
+    radius: float = Field(gt=0, description="m")
+    origin: Vec3 = (0.0, 0.0, 0.0)
+    axis: Vec3 = (1.0, 0.0, 0.0)
+    roughness: RoughnessSpec | None = None
+
+
+class WallsSpec(_Base):
+    kind: Literal["parallel_walls"]
+    gap: float = Field(gt=0, description="m")
+    origin: Vec3 = (0.0, 0.0, 0.0)
+    yaw: float = Field(0.0, description="rad, heading of the channel")
+    tilt: float = Field(0.0, description="rad, lean of both walls from vertical")
+
+
+class UChannelSpec(_Base):
+    kind: Literal["u_channel"]
+    width: float = Field(gt=0, description="m")
+    origin: Vec3 = (0.0, 0.0, 0.0)
+    yaw: float = 0.0
+
+
+class MoulinSpec(_Base):
+    kind: Literal["moulin"]
+    radius: float = Field(gt=0, description="mean shaft radius at the surface, m")
+    origin: Vec3 = Field((0.0, 0.0, 0.0), description="shaft axis at the ice surface")
+    slope: float = Field(0.0, description="dr/dz: > 0 narrows with depth")
+    roughness: RoughnessSpec = RoughnessSpec(rms=0.05, n_modes=24, wavelength_min=0.3, wavelength_max=5.0,
+                                             m_min=0, m_max=5)
+    surface: bool = True
+
+
+class FractalSpec(_Model):
+    size: int = Field(128, ge=4, description="samples per side")
+    hurst: float = Field(0.8, gt=0, le=1)
+    rms: float = Field(0.1, ge=0, description="m")
+    seed: int = 0
+
+
+class DemSpec(_Base):
+    kind: Literal["dem"]
+    file: str | None = None
+    fractal: FractalSpec | None = None
+    resolution: float | None = Field(None, gt=0, description="m per sample")
+    origin: tuple[float, float] | None = None
+    z_scale: float | None = None
+    z_offset: float | None = None
+
+    @model_validator(mode="after")
+    def _one_source(self):
+        if (self.file is None) == (self.fractal is None):
+            raise ValueError("give exactly one of 'file' or 'fractal'")
+        return self
+
+
+class MeshSpec(_Base):
+    kind: Literal["mesh"]
+    file: str
+    cells: int = Field(128, ge=4, description="grid cells along the longest side")
+    resolution: float | None = Field(None, gt=0, description="grid spacing, m (overrides cells)")
+    padding: float = Field(0.1, ge=0, description="m around the mesh")
+    inside: Literal["solid", "free"] = "solid"
+    open_surface: bool = False
+
+
+TerrainSpec = Annotated[Union[PlaneSpec, TubeSpec, WallsSpec, UChannelSpec, MoulinSpec, DemSpec, MeshSpec],
+                        Field(discriminator="kind")]
+_ADAPTER = TypeAdapter(TerrainSpec)
+_CLASSES = {"plane": analytic.PlaneTerrain, "tube": analytic.FourierCylinder,
+            "parallel_walls": analytic.ParallelWalls, "u_channel": analytic.UChannel,
+            "moulin": analytic.Moulin, "dem": dem.HeightField, "mesh": mesh.SdfGrid}
+
+
+# -- validation ------------------------------------------------------------------
+
+def _where(data, loc) -> str | None:
+    node, best = data, data.where() if hasattr(data, "where") else None
+    for part in loc:
+        if isinstance(node, dict) and part in node:
+            best = node.where(part) if hasattr(node, "where") else best
+            node = node[part]
+        elif isinstance(node, list) and isinstance(part, int) and part < len(node):
+            best = node.where(part) if hasattr(node, "where") else best
+            node = node[part]
+        else:
+            break
+    return best
+
+
+def validate_spec(data, source: str = "<terrain>"):
+    """dict -> spec model; errors name the file:line and the key."""
+    if not isinstance(data, dict):
+        raise ConfigError(f"a terrain definition is a mapping with a 'kind' key, got {type(data).__name__}", source)
+    try:
+        return _ADAPTER.validate_python(dict(data))
+    except ValidationError as e:
+        errs = e.errors()
+        err = next((x for x in errs if x["type"] == "extra_forbidden"), errs[0])   # a typo explains 'missing'
+        loc = [x for x in err["loc"] if not (isinstance(x, str) and x == data.get("kind"))]
+        msg = err["msg"]
+        if err["type"] == "extra_forbidden":
+            model = {c.model_fields["kind"].annotation.__args__[0]: c for c in
+                     (PlaneSpec, TubeSpec, WallsSpec, UChannelSpec, MoulinSpec, DemSpec, MeshSpec)}.get(data.get("kind"))
+            valid = ""
+            if model is not None and len(loc) == 1:
+                close = difflib.get_close_matches(str(loc[-1]), list(model.model_fields), n=1)
+                valid = (f"; did you mean '{close[0]}'?" if close else "") + f" valid keys: {', '.join(model.model_fields)}"
+            msg = f"unknown key '{loc[-1]}'{valid}"
+        elif "input" in err and not isinstance(err["input"], (dict, list)):
+            msg = f"{msg} (got {err['input']!r})"
+        raise ConfigError(msg, _where(data, loc) or source, ".".join(str(x) for x in loc) or None) from None
+
+
+def _materials(spec, cls, source):
+    mats = tuple(Material(**m.model_dump()) for m in spec.materials)
+    names = [m.name for m in mats]
+    rm = [0] * len(cls.regions)
+    for region, mat in spec.regions.items():
+        if region not in cls.regions:
+            raise ConfigError(f"unknown region '{region}' for kind {spec.kind}; regions: {', '.join(cls.regions)}",
+                              source, f"regions.{region}")
+        if mat not in names:
+            raise ConfigError(f"unknown material '{mat}'; materials: {', '.join(names)}", source, f"regions.{region}")
+        rm[cls.regions.index(region)] = names.index(mat)
+    return {"materials": mats, "region_material": rm}
+
+
+def build_terrain(spec, base_dir: Path = Path("."), source: str = "<terrain>", name: str = "", store=None) -> Terrain:
+    """Spec model (or plain dict) -> Terrain."""
+    if isinstance(spec, dict):
+        spec = validate_spec(spec, source)
+    kw = _materials(spec, _CLASSES[spec.kind], source)
+    kw["name"] = name or spec.kind
+    try:
+        if spec.kind == "plane":
+            return analytic.PlaneTerrain(spec.origin, spec.tilt, spec.azimuth, **kw)
+        if spec.kind == "tube":
+            modes = spec.roughness.modes() if spec.roughness else None
+            return analytic.FourierCylinder(spec.radius, spec.origin, spec.axis, modes=modes, **kw)
+        if spec.kind == "parallel_walls":
+            return analytic.ParallelWalls(spec.gap, spec.origin, spec.yaw, spec.tilt, **kw)
+        if spec.kind == "u_channel":
+            return analytic.UChannel(spec.width, spec.origin, spec.yaw, **kw)
+        if spec.kind == "moulin":
+            shaft = analytic.FourierCylinder(spec.radius, spec.origin, (0, 0, 1), spec.slope,
+                                             modes=spec.roughness.modes())
+            return analytic.Moulin(shaft, spec.surface, **kw)
+    except ValueError as e:
+        raise ConfigError(str(e), source) from None
+    if spec.kind == "dem":
+        return _build_dem(spec, base_dir, source, kw)
+    return mesh.mesh_terrain(base_dir / spec.file, spec.cells, spec.resolution, spec.padding, spec.inside,
+                             spec.open_surface, store=store, **kw)
+
+
+def _build_dem(spec: DemSpec, base_dir: Path, source: str, kw) -> Terrain:
+    if spec.fractal is not None:
+        f = spec.fractal
+        z, meta, where = dem.fractal_heights(f.size, f.hurst, f.rms, f.seed), {}, source
+    else:
+        path = base_dir / spec.file
+        z, meta, where = dem.read_grid(path), dem.sidecar(path), str(path)
+    res = spec.resolution if spec.resolution is not None else meta.get("resolution")
+    if res is None:
+        raise ConfigError("DEM needs 'resolution' (m per sample), in the terrain file or a .meta.yaml sidecar",
+                          source, "resolution")
+    scale = spec.z_scale if spec.z_scale is not None else meta.get("z_scale", 1.0)
+    offset = spec.z_offset if spec.z_offset is not None else meta.get("z_offset", 0.0)
+    origin = spec.origin if spec.origin is not None else tuple(meta.get("origin", (0.0, 0.0)))
+    if spec.fractal is not None and spec.origin is None:   # centre procedural patches on the origin
+        origin = (-0.5 * (z.shape[1] - 1) * res, -0.5 * (z.shape[0] - 1) * res)
+    return dem.HeightField(offset + scale * z, res, origin, source=where, **kw)
+
+
+# -- lookup ----------------------------------------------------------------------
+
+def terrain_dir() -> Path:
+    return Path(str(files("snakesim.terrains")))
+
+
+def available_terrains() -> list[str]:
+    return sorted(p.name[:-5] for p in terrain_dir().glob("*.yaml") if not p.name.endswith(".meta.yaml"))
+
+
+def resolve_terrain(ref: str) -> Path:
+    """A name in the terrains/ package folder, or a path to a YAML or mesh file."""
+    path = Path(ref).expanduser()
+    if path.is_file():
+        return path
+    if "/" not in ref and not ref.endswith((".yaml", ".yml")):
+        named = terrain_dir() / f"{ref}.yaml"
+        if named.is_file():
+            return named
+    names = available_terrains()
+    close = difflib.get_close_matches(Path(ref).stem, names, n=3, cutoff=0.5)
+    hint = f" Did you mean: {', '.join(close)}?" if close else ""
+    raise ConfigError(f"no terrain '{ref}': not a file, and not a terrain name "
+                      f"(available: {', '.join(names) or 'none'}).{hint}")
+
+
+def load_terrain(ref: str | dict, store=None) -> Terrain:
+    """Terrain from a name in terrains/, a path (YAML definition or OBJ/STL/PLY mesh) or an inline dict."""
+    if isinstance(ref, dict):
+        return build_terrain(ref, Path("."), "<inline terrain>", store=store)
+    path = resolve_terrain(ref)
+    if path.suffix.lower() in mesh.MESH_SUFFIXES:
+        return mesh.mesh_terrain(path, store=store, name=path.stem)
+    data = load_yaml(path)
+    spec = validate_spec(data, str(path))
+    return build_terrain(spec, path.parent, str(path), name=path.stem, store=store)
