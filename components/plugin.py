@@ -22,3 +22,15 @@ BUILTIN = (Constant, Step, Sine, Gain, Sum, ZeroOrderHold, Pendulum, ViscousDamp
 def snakesim_register_components(registry):
     for cls in BUILTIN:
         registry.add_component(cls)
+
+
+@hookimpl
+def snakesim_cli_shorthands():
+    # scene parameters every robot scene declares: swapping the robot or the
+    # terrain is then one flag on any scene
+    return [
+        ("--robot", "robot.name", "Robot design (eels-concept, eels-1.0, eels-1.0-front, eels-1.5, mini-eels-1.0)"),
+        ("--modules", "robot.modules", "Number of modules"),
+        ("--urdf", "robot.urdf", "Your URDF, checked against the chosen design's structure"),
+        ("--terrain", "terrain", "Terrain: a name in terrains/ or a YAML/mesh path"),
+    ]
