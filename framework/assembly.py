@@ -28,7 +28,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 from .errors import ConfigError
 from .expressions import substitute
-from .layering import TOP_KEYS, deep_merge, set_override
+from .layering import TOP_KEYS, deep_merge, merge_layer, set_override
 from .yaml_source import LocatedDict, LocatedList, load_yaml
 
 
@@ -138,7 +138,12 @@ def find_assembly(ref: str, search_path, relative_to: Path | None = None) -> Pat
         if c.is_file():
             return c
     names = available_assemblies(search_path)
-    close = difflib.get_close_matches(ref, names, n=4, cutoff=0.4)
+    # sub-assemblies (lib/...) are matched too, though not listed as scenes
+    known = set(names)
+    for base in bases:
+        if base.is_dir():
+            known.update(str(p.relative_to(base).with_suffix("")) for p in base.glob("*/*.yaml"))
+    close = difflib.get_close_matches(ref, sorted(known), n=4, cutoff=0.4)
     hint = f" Did you mean: {', '.join(close)}?" if close else ""
     raise ConfigError(f"no assembly '{ref}': not a file, and not a scene name ({', '.join(names) or 'none found'}).{hint}")
 
@@ -167,10 +172,10 @@ def _where_in(node, loc):
     best = node.where() if hasattr(node, "where") else None
     for part in loc:
         if isinstance(node, dict) and part in node:
-            best = node.where(part) or best
+            best = (node.where(part) if hasattr(node, "where") else None) or best
             node = node[part]
         elif isinstance(node, list) and part.isdigit() and int(part) < len(node):
-            best = node.where(int(part)) or best
+            best = (node.where(int(part)) if hasattr(node, "where") else None) or best
             node = node[int(part)]
         else:
             break
@@ -219,7 +224,10 @@ def _expand(data: LocatedDict, scope: dict, prefix: str | None, search_path, bas
         for i in range(inc.repeat):
             iscope = dict(scope, i=i)
             params = substitute(raw.get("params", {}) or {}, iscope)
-            path = find_assembly(substitute(inc.assembly, iscope), search_path, base_dir)
+            try:
+                path = find_assembly(substitute(inc.assembly, iscope), search_path, base_dir)
+            except ConfigError as e:
+                raise ConfigError(e.detail, _where_in(raw, ["assembly"]) or where, f"include[{n}].assembly") from None
             sub = load_yaml(path)
             declared = dict(sub.get("parameters") or {})
             bad = [k for k in params if k not in declared]
@@ -309,13 +317,14 @@ def resolve(assembly: str | Path | None, *, search_path=(), config_files=(), ove
         if bad:
             raise ConfigError(f"unknown top-level key '{bad[0]}' (valid: {', '.join(TOP_KEYS)})",
                               layer.where(bad[0]), bad[0])
-        data = deep_merge(data, layer)
+        data = merge_layer(data, layer)
     for item in overrides:
-        data = deep_merge(data, set_override(item, dict(data.get("parameters") or {})))
+        data = merge_layer(data, set_override(item, dict(data.get("parameters") or {})))
     if sim_overrides:
-        layer = LocatedDict(sim={k: v for k, v in sim_overrides.items() if v is not None})
-        layer.file = "command line"
-        data = deep_merge(data, layer)
+        flags = LocatedDict({k: v for k, v in sim_overrides.items() if v is not None})
+        layer = LocatedDict(sim=flags)
+        layer.file = flags.file = "command line"
+        data = merge_layer(data, layer)
 
     parameters = data.get("parameters") or LocatedDict()
     if not isinstance(parameters, dict):

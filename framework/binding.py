@@ -46,9 +46,13 @@ def make_namespace(owner: str, role: str, numeric: dict[str, Any], cells: dict[s
 
     def __setattr__(self, name, value):
         if name in frozen_names:
-            hint = f"write into the buffer instead: {role[0]}.{name}[...] = value" if writable else "inputs are read-only"
+            if value is getattr(self, name):
+                return  # ``y.a += b`` works in place, then rebinds the same array: harmless
+            hint = f"write into the buffer instead: y.{name}[...] = value" if writable else "inputs are read-only"
             raise AttributeError(f"{owner}: cannot rebind {role} '{name}'; {hint}")
-        if writable and name in cells:
+        if name in cells:
+            if not writable:
+                raise AttributeError(f"{owner}: cannot rebind {role} '{name}'; inputs are read-only")
             object.__setattr__(self, name, value)
             return
         raise AttributeError(f"{owner} has no {role[:-1]} '{name}'")

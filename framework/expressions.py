@@ -13,6 +13,7 @@ A string that is exactly one template keeps the value's type (``"${k}"`` ->
 from __future__ import annotations
 
 import ast
+import contextlib
 import operator
 import re
 
@@ -43,12 +44,23 @@ def _eval(node, scope, expr):
     if isinstance(node, (ast.Name, ast.Attribute)):
         return _lookup(ast.unparse(node), scope, expr)
     if isinstance(node, ast.BinOp) and type(node.op) in _BINOPS:
-        return _BINOPS[type(node.op)](_eval(node.left, scope, expr), _eval(node.right, scope, expr))
+        a, b = _number(_eval(node.left, scope, expr), expr), _number(_eval(node.right, scope, expr), expr)
+        try:
+            return _BINOPS[type(node.op)](a, b)
+        except ZeroDivisionError:
+            raise ConfigError(f"'${{{expr}}}': division by zero") from None
     if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
-        v = _eval(node.operand, scope, expr)
+        v = _number(_eval(node.operand, scope, expr), expr)
         return -v if isinstance(node.op, ast.USub) else v
     raise ConfigError(f"'${{{expr}}}': only parameter names, numbers, + - * / // % and "
                       f"parentheses are allowed in templates")
+
+
+def _number(v, expr: str):
+    """Arithmetic is on numbers only (no string repetition, no dict/list operators)."""
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        raise ConfigError(f"'${{{expr}}}': arithmetic needs numbers, got {v!r}")
+    return v
 
 
 def evaluate(expr: str, scope: dict):
@@ -72,15 +84,32 @@ def substitute(value, scope: dict):
         out = type(value)()
         _copy_position(value, out)
         for k, v in value.items():
-            out[substitute(k, scope) if isinstance(k, str) else k] = substitute(v, scope)
+            with _located(value, k):
+                out[substitute(k, scope) if isinstance(k, str) else k] = substitute(v, scope)
         if hasattr(value, "pos"):
             out.pos = {substitute(k, scope) if isinstance(k, str) else k: ln for k, ln in value.pos.items()}
         return out
     if isinstance(value, list):
-        out = type(value)(substitute(v, scope) for v in value)
+        items = []
+        for n, v in enumerate(value):
+            with _located(value, n):
+                items.append(substitute(v, scope))
+        out = type(value)(items)
         _copy_position(value, out)
         return out
     return value
+
+
+@contextlib.contextmanager
+def _located(container, key):
+    """Give a template error the file:line of the innermost located key holding it."""
+    try:
+        yield
+    except ConfigError as e:
+        where = container.where(key) if e.where is None and hasattr(container, "where") else None
+        if where is None:
+            raise
+        raise ConfigError(e.detail, where, e.key) from None
 
 
 def _copy_position(src, dst) -> None:

@@ -39,8 +39,9 @@ class Harness:
             if isinstance(info.signal, Structured):
                 self._in_cells[n] = Cell(port.default)
             else:
-                shape = info.shape if info.shape is not None else np.shape(port.default or 0.0)
-                self._in[n] = np.array(np.broadcast_to(np.asarray(port.default or 0.0, dtype=info.signal.dtype), shape))
+                default = 0.0 if port.default is None else port.default
+                shape = info.shape if info.shape is not None else np.shape(default)
+                self._in[n] = np.array(np.broadcast_to(np.asarray(default, dtype=info.signal.dtype), shape))
         for n in component.outputs:
             info = self.infos[n]
             if isinstance(info.signal, Structured):

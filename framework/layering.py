@@ -9,10 +9,8 @@ from __future__ import annotations
 
 import difflib
 
-import yaml
-
 from .errors import ConfigError
-from .yaml_source import LocatedDict
+from .yaml_source import LocatedDict, load_yaml_text
 
 #: top-level keys of an assembly / resolved configuration
 TOP_KEYS = ("description", "parameters", "sim", "include", "components", "connections", "record", "stop")
@@ -35,6 +33,33 @@ def deep_merge(base, over):
     return out
 
 
+def merge_layer(base, over):
+    """``deep_merge`` of one configuration layer over the layers below it.
+
+    ``sim.integrator`` may be a bare name: a later mapping refines the earlier
+    integrator (``--set sim.integrator.params.rtol=1e-8`` over ``integrator:
+    dopri5``), and one naming a different integrator replaces it, params and all.
+    """
+    sim, over_sim = (base.get("sim"), over.get("sim")) if isinstance(base, dict) and isinstance(over, dict) else (None, None)
+    if isinstance(sim, dict) and isinstance(over_sim, dict) and "integrator" in sim \
+            and isinstance(over_sim.get("integrator"), dict):
+        old = sim["integrator"]
+        old = {"name": old} if isinstance(old, str) else old
+        if isinstance(old, dict) and over_sim["integrator"].get("name", old.get("name")) != old.get("name"):
+            old = {}
+        base = _with(base, "sim", _with(sim, "integrator", old))
+    return deep_merge(base, over)
+
+
+def _with(d: dict, key, value) -> LocatedDict:
+    """A copy of mapping ``d`` (positions kept) with ``key`` set to ``value``."""
+    out = LocatedDict(d)
+    out.pos = dict(getattr(d, "pos", {}))
+    out.file, out.line = getattr(d, "file", None), getattr(d, "line", None)
+    out[key] = value
+    return out
+
+
 def parse_set(item: str) -> tuple[list[str], object]:
     """``a.b.c=value`` -> (["a","b","c"], value parsed as a YAML scalar/flow value)."""
     if "=" not in item:
@@ -44,9 +69,9 @@ def parse_set(item: str) -> tuple[list[str], object]:
     if not key or any(not part for part in key.split(".")):
         raise ConfigError(f"'--set {item}': empty key in '{key}'", "--set")
     try:
-        value = yaml.safe_load(raw) if raw.strip() else ""
-    except yaml.YAMLError as e:
-        raise ConfigError(f"'--set {item}': value '{raw}' is not valid YAML ({e.problem})", "--set") from None
+        value = load_yaml_text(raw, "--set") if raw.strip() else ""
+    except ConfigError as e:
+        raise ConfigError(f"'--set {item}': value '{raw}' is not valid YAML ({e.detail})", "--set") from None
     return key.split("."), value
 
 

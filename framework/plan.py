@@ -317,7 +317,6 @@ def build(resolved: Resolved, registry) -> Plan:
         if not manifold:
             n_euclid = sx.stop
         ix, idx = sx.stop, sdx.stop
-    nxd = sum(np.asarray(v).size for v in dstates.values() if v is not None and True)
     XD = np.zeros(sum(np.asarray(dstates[n]).size for n in comps if dstates[n] is not None))
     dslices, xd_of = {}, {}
     i0 = 0
@@ -328,7 +327,6 @@ def build(resolved: Resolved, registry) -> Plan:
             XD[dslices[n]] = v
             xd_of[n] = XD[dslices[n]]
             i0 += v.size
-    del nxd
 
     # nodes and their order --------------------------------------------------------
     periods = {n: _period(c, dt) for n, c in comps.items()}

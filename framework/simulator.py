@@ -96,8 +96,8 @@ class Simulator:
                 raise BuildError(f"sim.record_rate {record_rate:g} Hz is not an integer number of base steps "
                                  f"(dt = {dt:g} s); valid: {1 / dt:g}/k Hz")
             self.record_every = n
-        if plan.nx:
-            integrator.bind(plan)
+        # every run starts from the initial state (one session, many runs)
+        self.X0, self.XD0 = plan.X.copy(), plan.XD.copy()
 
     def run(self, duration: float, t0: float = 0.0, progress=None, realtime: bool = False,
             out_dir: Path | None = None) -> RunResult:
@@ -109,6 +109,10 @@ class Simulator:
                                 f"(nearest: {max(1, n_steps) * dt:g} s)")
         log = Recorder(self.record_refs, plan, n_steps // self.record_every + 1)
         X, XD = plan.X, plan.XD
+        np.copyto(X, self.X0)
+        np.copyto(XD, self.XD0)
+        if plan.nx:
+            integ.bind(plan)      # fresh work arrays, step size and Jacobian
         X_good, XD_good = X.copy(), XD.copy()
         major, updates, derivs = plan.major, plan.updates, plan.derivs
         n_phases, rec_every = plan.n_phases, self.record_every

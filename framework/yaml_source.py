@@ -7,6 +7,7 @@ as ``scene.yaml:14: components.pend.params.length``. Only safe YAML tags.
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import yaml
@@ -56,14 +57,20 @@ class _Loader(yaml.SafeLoader):
 
 
 def _construct_mapping(loader: _Loader, node: yaml.MappingNode):
+    # merge keys (<<: *anchor) put the merged pairs first; later (own) keys override
+    # them, as YAML merge semantics say: only a key written twice is a duplicate
+    own_nodes = {id(k) for k, _ in node.value if k.tag != "tag:yaml.org,2002:merge"}
     loader.flatten_mapping(node)
     out = LocatedDict()
     out.file, out.line = loader.source_name, node.start_mark.line + 1
+    own_keys = set()
     for key_node, value_node in node.value:
         key = loader.construct_object(key_node, deep=True)
-        if key in out:
-            raise ConfigError(f"duplicate key '{key}' (first at line {out.pos[key][1]})",
-                              f"{loader.source_name}:{key_node.start_mark.line + 1}")
+        if id(key_node) in own_nodes:
+            if key in own_keys:
+                raise ConfigError(f"duplicate key '{key}' (first at line {out.pos[key][1]})",
+                                  f"{loader.source_name}:{key_node.start_mark.line + 1}")
+            own_keys.add(key)
         out[key] = loader.construct_object(value_node, deep=True)
         out.pos[key] = (loader.source_name, key_node.start_mark.line + 1)
     return out
@@ -76,6 +83,9 @@ def _construct_sequence(loader: _Loader, node: yaml.SequenceNode):
     return out
 
 
+# YAML 1.1 (PyYAML) reads 1e6 and 1e-4 as strings; read them as floats, as YAML 1.2 does
+_Loader.add_implicit_resolver("tag:yaml.org,2002:float",
+                              re.compile(r"^[-+]?[0-9][0-9_]*(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"), list("-+0123456789"))
 _Loader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _construct_mapping)
 _Loader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_SEQUENCE_TAG, _construct_sequence)
 

@@ -35,6 +35,7 @@ class Integrator:
 
     def bind(self, system) -> None:
         self.sys = system
+        self.stats = {"f_evals": 0, "steps": 0}    # per run: bind starts every run
         self._alloc(system.nx, system.ndx)
 
     def _alloc(self, nx: int, ndx: int) -> None:
