@@ -298,6 +298,19 @@ def _expand(data: LocatedDict, scope: dict, prefix: str | None, search_path, bas
         out["stop"].append((spec, where))
 
 
+def _check_declared(given: dict, declared: dict, key: str, assembly: str) -> None:
+    """A later layer may set parameters the assembly declares, never invent one (a typo)."""
+    for k, v in given.items():
+        if k not in declared:
+            close = difflib.get_close_matches(str(k), [str(d) for d in declared], n=3, cutoff=0.5)
+            hint = f"; did you mean {', '.join(close)}?" if close else ""
+            where = given.where(k) if hasattr(given, "where") else None
+            raise ConfigError(f"'{k}' is not a parameter of {assembly} (it declares: "
+                              f"{', '.join(map(str, declared)) or 'none'}){hint}", where, f"{key}.{k}")
+        if isinstance(v, dict) and isinstance(declared[k], dict):
+            _check_declared(v, declared[k], f"{key}.{k}", assembly)
+
+
 def resolve(assembly: str | Path | None, *, search_path=(), config_files=(), overrides=(),
             sim_overrides: dict | None = None) -> Resolved:
     """Load, layer and expand an assembly into a :class:`Resolved` configuration.
@@ -309,6 +322,7 @@ def resolve(assembly: str | Path | None, *, search_path=(), config_files=(), ove
     data = load_yaml(path)
     if not isinstance(data, dict):
         raise ConfigError("an assembly must be a YAML mapping", str(path))
+    declared = data.get("parameters") or {}
     for cf in config_files:
         layer = load_yaml(cf)
         if not isinstance(layer, dict):
@@ -329,6 +343,7 @@ def resolve(assembly: str | Path | None, *, search_path=(), config_files=(), ove
     parameters = data.get("parameters") or LocatedDict()
     if not isinstance(parameters, dict):
         raise ConfigError("'parameters' must be a mapping", data.where("parameters"), "parameters")
+    _check_declared(parameters, declared, "parameters", path.name)
     out = {"components": {}, "components_raw": {}, "where": {}, "connections": [], "record": [], "stop": []}
     _expand(data, dict(parameters), None, search_path, path.parent, out)
 

@@ -23,12 +23,13 @@ def _fail(e: Exception):
     raise click.ClickException(str(e))
 
 
-def _progress(stream=sys.stderr):
+def _progress(stream=None):
     def report(t, t_end):
+        out = stream or sys.stderr  # looked up per call: stderr may be redirected after import
         frac = min(1.0, t / t_end) if t_end else 1.0
         bar = "#" * int(30 * frac)
-        stream.write(f"\r  [{bar:<30}] {100 * frac:5.1f}%  t = {t:.2f} / {t_end:.2f} s")
-        stream.flush()
+        out.write(f"\r  [{bar:<30}] {100 * frac:5.1f}%  t = {t:.2f} / {t_end:.2f} s")
+        out.flush()
     return report
 
 
@@ -88,7 +89,7 @@ def run(assembly, config, sets, duration, dt, integrator, realtime, out_dir, sav
                    f"({sm['real_time_factor']:.3g}x real time, {sm['steps']} steps)", err=True)
         if out_dir:
             click.echo(f"wrote {out_dir}/signals.csv, summary.json, config.yaml", err=True)
-    if not result.summary["completed"] and "non-finite" in result.summary["stop_reason"]:
+    if result.last_good_state is not None:  # blew up or the integrator gave up
         sys.exit(3)
 
 

@@ -147,11 +147,13 @@ class Simulator:
             if has_cont:
                 try:
                     integ.advance(t, t + dt, plan.DX)
-                except FloatingPointError as e:
-                    bad = ("integrator", str(e))
+                except (SnakesimError, FloatingPointError) as e:
+                    # e.g. an adaptive step collapsing: stop like a blow-up, keeping the last good state
+                    bad = True
+                    stop_reason = f"integrator {integ.name} failed after t = {t:.6g} s: {e}"
+                    break
             if not (np.isfinite(X).all() and np.isfinite(XD).all()):
-                bad = bad or self._offender()
-            if bad:
+                bad = self._offender()
                 stop_reason = f"non-finite state in component '{bad[0]}' after t = {t:.6g} s ({bad[1]})"
                 break
             np.copyto(X_good, X)

@@ -209,3 +209,18 @@ def test_merge_layer_integrator_shorthand():
     m = merge_layer(base, load_yaml_text("sim: {integrator: rosenbrock2}\n", "b.yaml"))
     assert m["sim"]["integrator"] == "rosenbrock2"
     assert base["sim"]["integrator"] == {"name": "rk4", "params": {"substeps": 2}}   # input untouched
+
+
+def test_parameter_typo_in_a_later_layer_is_an_error(tmp_path):
+    from snakesim.framework.errors import ConfigError
+    from snakesim.framework.registry import default_registry
+    from snakesim.framework.session import load_session
+
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text("parameters:\n  dampin: 0.3\n")
+    with pytest.raises(ConfigError) as e:
+        load_session("pendulum", config_files=[cfg], registry=default_registry())
+    msg = str(e.value)
+    assert f"{cfg}:2" in msg and "'dampin' is not a parameter of pendulum.yaml" in msg and "damping" in msg
+    with pytest.raises(ConfigError, match="'dampin' is not a parameter"):
+        load_session("pendulum", overrides=["parameters.dampin=0.3"], registry=default_registry())

@@ -187,3 +187,24 @@ def test_manifold_state_is_integrated_with_the_components_map(scene, name):
     np.testing.assert_allclose(r["rotor.norm"], 1.0, rtol=0, atol=1e-13)
     # the Euclidean neighbour still follows cos t (to the scheme's accuracy at h = 0.01)
     assert np.abs(r["osc.x"] - np.cos(t)).max() < 0.01
+
+
+def test_dopri5_giving_up_is_a_stop_with_last_good_state(scene, tmp_path):
+    """With h_min far above the stable step of a stiff oscillator (ω = 1e4 rad/s:
+    dopri5 needs h < ~3.3/ω = 3.3e-4 s), the error control cannot be met: the run
+    stops with the integrator named and the last good state kept, like a blow-up."""
+    s = scene("""
+        sim:
+          duration: 0.1
+          dt: 0.01
+          integrator: {name: dopri5, params: {h_min: 0.005, rtol: 1e-9, atol: 1e-12}}
+        components:
+          osc: {type: test_oscillator, params: {omega: 1.0e4, x0: 1.0, v0: 0.0}}
+        record: [osc.x]
+        """)
+    r = s.run(out_dir=tmp_path)
+    assert not r.summary["completed"]
+    assert r.summary["stop_reason"].startswith("integrator dopri5 failed after t = ")
+    assert "h_min" in r.summary["stop_reason"]
+    assert r.last_good_state is not None and (tmp_path / "last_good_state.npz").is_file()
+    np.testing.assert_array_equal(r.last_good_state["X"], [1.0, 0.0])  # failed on the first step
