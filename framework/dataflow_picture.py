@@ -1,25 +1,34 @@
 """Draw a built assembly's dataflow graph as a picture (``snakesim graph ASSEMBLY -o FILE``).
 
-One box per component (name, type, state size, rate, recorded ports), one
-arrow per pair of connected components labelled with every ``out → in`` it
-carries. Boxes sit in columns by longest-path layering of the connection
-graph, left to right in the order signals flow within a step; a connection
-into an input that feeds through to no output (a force into a body, whose
-effect passes through its state) does not order the columns, which breaks
-every physical feedback loop, and any cycle left is broken by depth-first
-search. Components of one sub-assembly (``cell1/mass``, ``cell1/spring``)
-share a labelled frame, nested frames for nested prefixes. Pruned
-components are drawn grey and dashed. A graph many columns wide is wrapped
-into strips, so ~50 components stay legible.
+One box per component (name, type, state sizes, rate, recorded and stop
+ports), coloured by kind; one arrow per connected pair of components,
+labelled with every ``out → in`` it carries (written ``in ← out`` when the
+arrow runs right to left, so each component's port names sit on its side).
 
-Layout (:func:`layout`) is separate from drawing (:func:`draw`) so it can be
-tested without looking at pixels. matplotlib is used without pyplot (an Agg
-canvas), so drawing never touches a global backend.
+Columns: longest-path layering, so a picture reads in the order a step
+evaluates. Links into inputs that feed through to an output order the
+columns first; a link into a state-only input (a force into a body, a
+sample into a hold) orders them too unless it would close a cycle: that is
+where every physical feedback loop is cut. Rows: the components of one
+sub-assembly (``cell1/mass``, ``cell1/spring``) share a labelled frame,
+nested for nested prefixes, and frames are packed onto a skyline so they
+never overlap. Pruned components are drawn grey and dashed.
+
+Staying legible at ~50 components: a tall stack of frames continues in
+panels side by side, a long chain of columns wraps into strips (its wrap
+arrows routed between the strips), arrows bend round boxes in their way,
+long arrows carry their labels next to their targets, and an output
+broadcast to five or more components is drawn as stubs instead of lines.
+
+:func:`layout` (numbers, testable) is separate from :func:`draw` (pixels).
+matplotlib is used without pyplot, on an Agg canvas, so drawing never
+touches a global backend.
 """
 
 from __future__ import annotations
 
 import math
+import re
 from collections import defaultdict
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -34,9 +43,11 @@ ITEM_GAP = 0.22        # between stacked sub-assembly frames
 MIN_COL_GAP, MAX_COL_GAP = 0.75, 1.9
 GROUP_PAD_X, GROUP_PAD_TOP, GROUP_PAD_BOTTOM = 0.09, 0.24, 0.08
 STRIP_GAP = 0.45
-PANEL_GAP = 0.6      # extra space between side-by-side panels
+PANEL_GAP = 0.6        # extra space between side-by-side panels
 TARGET_ASPECT = 1.5    # width / height a wrapped picture aims for
 MARGIN = 0.25
+LONG_ARROW = 3.0       # inches of visible line beyond which a label sits by its target
+FAN_OUT = 5            # an output feeding this many components is drawn as stubs, not lines
 
 STYLE = {  # kind -> (fill, border)
     "continuous": ("#dbe9f6", "#3b6ea5"),
@@ -104,6 +115,8 @@ class GroupFrame:
 
 @dataclass
 class Layout:
+    """Everything :func:`draw` needs, in inches with y pointing down."""
+
     title: str
     boxes: dict[str, Box]
     links: list[Link]
@@ -113,7 +126,7 @@ class Layout:
     n_layers: int
     n_strips: int                # strips or panels the picture is wrapped into
     mode: str = "single"         # "single", "strips" (stacked rows) or "panels" (side by side)
-    strip_bottoms: list[float] = field(default_factory=list)
+    strip_bottoms: list[float] = field(default_factory=list)   # per strip: where the gap below begins
 
 
 # -- the graph ---------------------------------------------------------------------
@@ -225,10 +238,14 @@ def collect(session) -> tuple[dict[str, Box], list[Link], str]:
 def assign_layers(boxes: dict[str, Box], links: list[Link]) -> int:
     """Longest-path layering; returns the number of layers.
 
-    Only links into feedthrough inputs order the columns; cycles left among
+    Links into feedthrough inputs order the columns first; cycles among
     those (possible when a component mixes state-only and feedthrough
-    outputs) are broken by dropping depth-first back edges, in definition
-    order so the picture is deterministic.
+    outputs) are broken by dropping depth-first back edges. Then each link
+    into a state-only input (a force into a body, a sample into a hold)
+    orders the columns too unless it would close a cycle: that is where a
+    physical feedback loop is cut, so the picture reads left to right from
+    states, through the blocks they feed, to the inputs they drive. Links
+    are taken in definition order, so the picture is deterministic.
     """
     order = sorted(boxes, key=lambda n: boxes[n].index)
     succ = defaultdict(list)
@@ -257,6 +274,28 @@ def assign_layers(boxes: dict[str, Box], links: list[Link]) -> int:
             if s is None:
                 state[lk.dst] = 1
                 stack.append((lk.dst, iter(succ[lk.dst])))
+
+    after = defaultdict(set)
+    for lk in links:
+        if lk.orders:
+            after[lk.src].add(lk.dst)
+
+    def reaches(a, b) -> bool:
+        seen, todo = {a}, [a]
+        while todo:
+            n = todo.pop()
+            if n == b:
+                return True
+            for m in after[n] - seen:
+                seen.add(m)
+                todo.append(m)
+        return False
+
+    for lk in sorted((lk for lk in links if not lk.through and lk.src != lk.dst),
+                     key=lambda lk: (boxes[lk.src].index, boxes[lk.dst].index)):
+        if not reaches(lk.dst, lk.src):
+            lk.orders = True
+            after[lk.src].add(lk.dst)
 
     preds, outs = defaultdict(list), defaultdict(list)
     for lk in links:
@@ -413,15 +452,22 @@ def layout(session) -> Layout:
     width = sum(col_w.values()) + gap * (n_layers - 1)
 
     # a tall stack of sub-assemblies continues in panels side by side
-    split = root
-    while not split.members and len(split.children) == 1:
-        split = next(iter(split.children.values()))
+    split = root            # the group whose stack is cut: descend while one sub-assembly holds most boxes
+    while len(split.children) == 1:
+        only = next(iter(split.children.values()))
+        if 2 * sum(1 for _ in _descendants(only)) <= sum(1 for _ in _descendants(split)):
+            break
+        split = only
     n_panels = 1
     if height > 2 * width / TARGET_ASPECT:
         k = max(1, round(math.sqrt(TARGET_ASPECT * height / (width + PANEL_GAP))))
         if k > 1:
-            height = _place_rows(boxes, root, slot_h, n_layers, split, height / k * 1.02)
-            n_panels = 1 + max(b.col for b in boxes.values()) // n_layers
+            full = height
+            for stretch in (1.02, 1.1, 1.2, 1.35, 1.5):   # no lonely last panel: k panels at most
+                height = _place_rows(boxes, root, slot_h, n_layers, split, full / k * stretch)
+                n_panels = 1 + max(b.col for b in boxes.values()) // n_layers
+                if n_panels <= k:
+                    break
 
     # a wide graph wraps into strips of consecutive columns
     per = n_layers
@@ -492,7 +538,26 @@ def _bezier_point(p0, p2, rad, t):
     return a * x1 + b * cx + c * x2, a * y1 + b * cy + c * y2
 
 
-LONG_ARROW = 3.0       # inches of visible line beyond which a label sits by its target
+
+def _pattern(names: list[str]) -> str:
+    """'robot/module*/sensor.u' for names that differ only in their numbers, else a count."""
+    pats = {re.sub(r"\d+", "*", n) for n in names}
+    return pats.pop() if len(pats) == 1 else f"{len(names)} inputs"
+
+
+def _fan_outs(links: list[Link]) -> tuple[list[Link], dict[tuple[str, str], list[tuple[str, str]]]]:
+    """Split off outputs that feed FAN_OUT or more components; returns (other links, fans)."""
+    targets = defaultdict(list)
+    for lk in links:
+        for o, i in lk.ports:
+            targets[(lk.src, o)].append((lk.dst, i))
+    fans = {k: v for k, v in targets.items() if len({d for d, _ in v}) >= FAN_OUT}
+    rest = []
+    for lk in links:
+        ports = [(o, i) for o, i in lk.ports if (lk.src, o) not in fans]
+        if ports:
+            rest.append(Link(lk.src, lk.dst, ports, lk.through, lk.orders))
+    return rest, fans
 
 
 def _facing(a: Box, b: Box) -> tuple[float, float, float]:
@@ -520,21 +585,23 @@ def _overlap(r1, r2) -> float:
     return w * h if w > 0 and h > 0 else 0.0
 
 
-def _hits(p0, p2, rad, obstacles) -> int:
-    """How many sample points of an arc fall inside other boxes."""
+def _hits(p0, p2, rad, obstacles, bounds=None) -> int:
+    """How many sample points of an arc fall inside other boxes (or off the picture)."""
     n = 0
     for k in range(1, 32):
         x, y = _bezier_point(p0, p2, -rad, k / 32)
         n += any(x0 < x < x1 and y0 < y < y1 for x0, y0, x1, y1 in obstacles)
+        if bounds is not None:
+            n += 2 * (not (bounds[0] <= x <= bounds[2] and bounds[1] <= y <= bounds[3]))
     return n
 
 
-def _choose_rad(p0, p2, preferred: float, obstacles) -> float:
+def _choose_rad(p0, p2, preferred: float, obstacles, bounds=None) -> float:
     """The preferred bend unless the arc then crosses a box: then the least bend that clears."""
-    if _hits(p0, p2, preferred, obstacles) == 0:
+    if _hits(p0, p2, preferred, obstacles, bounds) == 0:
         return preferred
     cands = [preferred] + [s * r for r in (0.15, 0.25, 0.35, 0.5, 0.7) for s in (1, -1)]
-    return min(cands, key=lambda r: (_hits(p0, p2, r, obstacles), abs(r)))
+    return min(cands, key=lambda r: (_hits(p0, p2, r, obstacles, bounds), abs(r)))
 
 
 def _draw_links(ax, lay: Layout, patches: dict) -> None:
@@ -543,6 +610,7 @@ def _draw_links(ax, lay: Layout, patches: dict) -> None:
 
     fixed, movable = [], []   # labels: (x, y, lines, greyed) and (candidates, lines, greyed)
     boxes = lay.boxes
+    bounds = (-MARGIN, -MARGIN, lay.width + MARGIN, lay.height + MARGIN)
 
     def obstacles(*skip):
         return [(b.x - 0.03, b.y - 0.03, b.x + b.w + 0.03, b.y + b.h + 0.03)
@@ -559,8 +627,26 @@ def _draw_links(ax, lay: Layout, patches: dict) -> None:
         # arc3 bends in display space, where y points the other way: hence -rad
         return _bezier_point(src.center, dst.center, -rad, t)
 
+    links, fans = _fan_outs(lay.links)
+    for (src_name, out), targets in fans.items():
+        # a broadcast: a stub at the source naming the receivers, a stub into each receiver naming the source
+        src = boxes[src_name]
+        greyed = src.kind == "pruned"
+        y = src.y + src.h / 2
+        ax.add_patch(FancyArrowPatch((src.x + src.w, y), (src.x + src.w + 0.3, y), arrowstyle="-|>",
+                                     mutation_scale=9, color="#444444", lw=0.9, zorder=1, shrinkA=0, shrinkB=0))
+        lines = [f"{out} → {len(targets)} inputs:", _pattern([f"{d}.{i}" for d, i in targets])]
+        fixed.append((src.x + src.w + 0.34 + _label_size(lines)[0] / 2, y, lines, greyed))
+        for dst_name, inp in targets:
+            dst = boxes[dst_name]
+            y = dst.y + dst.h / 2
+            ax.add_patch(FancyArrowPatch((dst.x - 0.3, y), (dst.x, y), arrowstyle="-|>", mutation_scale=9,
+                                         color="#444444", lw=0.9, zorder=1, shrinkA=0, shrinkB=1))
+            tag = [f"{src_name}.{out} → {inp}"]
+            fixed.append((dst.x - 0.32 - _label_size(tag)[0] / 2, y, tag, greyed or dst.kind == "pruned"))
+
     by_pair = defaultdict(list)
-    for lk in lay.links:
+    for lk in links:
         by_pair[frozenset((lk.src, lk.dst))].append(lk)
     lanes = defaultdict(int)
     for group in by_pair.values():
@@ -605,11 +691,11 @@ def _draw_links(ax, lay: Layout, patches: dict) -> None:
             one, two = group
             src, dst = boxes[one.src], boxes[one.dst]
             small = min(0.15, 0.12 / d)
-            if a.strip != b.strip or (_hits(src.center, dst.center, small, obs) == 0
-                                      and _hits(dst.center, src.center, small, obs) == 0):
+            if a.strip != b.strip or (_hits(src.center, dst.center, small, obs, bounds) == 0
+                                      and _hits(dst.center, src.center, small, obs, bounds) == 0):
                 rads = (small, small)            # the two arrows bow apart
             else:                                # both arcs bend round the same side, nested
-                r = _choose_rad(src.center, dst.center, 0.25, obs)
+                r = _choose_rad(src.center, dst.center, 0.25, obs, bounds)
                 r = r if abs(r) >= 0.15 else math.copysign(0.25, r or 1.0)
                 rads = (r, -(r + math.copysign(0.1, r)))
             arrow(src, dst, rads[0], color(one), 0.55 if a.strip != b.strip else 1.0)
@@ -642,7 +728,7 @@ def _draw_links(ax, lay: Layout, patches: dict) -> None:
         else:
             rad = min(0.3, 0.45 / d)
         if a.strip == b.strip:
-            rad = _choose_rad(src.center, dst.center, rad, obs)
+            rad = _choose_rad(src.center, dst.center, rad, obs, bounds)
         arrow(src, dst, rad, color(lk), 0.55 if a.strip != b.strip else 1.0)
         if far:       # somewhere free along the arrow, as near its target as possible
             dd, rs, rt = _facing(src, dst)

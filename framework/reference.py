@@ -13,7 +13,9 @@ def component_reference(registry) -> dict:
     out = {}
     for name in sorted(registry.components):
         cls = registry.components[name]
-        doc = inspect.getdoc(cls) or inspect.getdoc(inspect.getmodule(cls)) or ""
+        # the class's own docstring (getdoc would inherit typing.Generic's), else its module's
+        own = cls.__dict__.get("__doc__")
+        doc = inspect.cleandoc(own) if own else inspect.getdoc(inspect.getmodule(cls)) or ""
         params = []
         for pname, f in cls.Params.model_fields.items():
             default = f.get_default(call_default_factory=True)
@@ -33,6 +35,11 @@ def component_reference(registry) -> dict:
     return out
 
 
+def _cell(text) -> str:
+    """A Markdown table cell: a '|' inside (``float | None``) would split it."""
+    return str(text).replace("|", "\\|")
+
+
 def reference_markdown(ref: dict) -> str:
     lines = ["# Component reference", "",
              "Generated from the registry by `snakesim components --markdown`; do not edit by hand.", ""]
@@ -41,14 +48,14 @@ def reference_markdown(ref: dict) -> str:
         if c["inputs"] or c["outputs"]:
             lines += ["| port | direction | signal | notes |", "|---|---|---|---|"]
             for p in c["inputs"]:
-                lines.append(f"| `{p['name']}` | in | {p['signal']} | {'required' if p['required'] else 'optional'} |")
+                lines.append(f"| `{p['name']}` | in | {_cell(p['signal'])} | {'required' if p['required'] else 'optional'} |")
             for p in c["outputs"]:
                 ft = ", ".join(p["feedthrough"]) or "none (state only)"
-                lines.append(f"| `{p['name']}` | out | {p['signal']} | feedthrough: {ft} |")
+                lines.append(f"| `{p['name']}` | out | {_cell(p['signal'])} | feedthrough: {ft} |")
             lines.append("")
         if c["params"]:
             lines += ["| parameter | type | default | description |", "|---|---|---|---|"]
             for p in c["params"]:
-                lines.append(f"| `{p['name']}` | {p['type']} | `{p['default']!r}` | {p['description']} |")
+                lines.append(f"| `{p['name']}` | {_cell(p['type'])} | `{_cell(repr(p['default']))}` | {_cell(p['description'])} |")
             lines.append("")
     return "\n".join(lines) + "\n"
