@@ -1,0 +1,5 @@
+"""`python -m snakesim.framework` is the `snakesim` command."""
+
+from .cli import main
+
+main()
