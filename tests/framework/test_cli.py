@@ -121,3 +121,21 @@ def test_blow_up_exits_with_status_3(invoke):
     r = invoke("run", "mass-spring-chain", "--set", "n=2", "--set", "k=1e6", "--dt", "0.01", "--duration", "1",
                "--integrator", "rk4", "--quiet")
     assert r.exit_code == 3
+
+
+def test_realtime_paces_simulated_time_to_the_wall_clock(tmp_path):
+    """--realtime sleeps whenever simulation runs ahead, so wall time can never be
+    shorter than simulated time: the real-time factor is at most 1 (a lower bound
+    on wall time, which sleeping guarantees, not a speed target)."""
+    import json as _json
+
+    from click.testing import CliRunner
+
+    from snakesim.framework.cli import cli
+
+    out = tmp_path / "rt"
+    res = CliRunner().invoke(cli, ["run", "pendulum", "--duration", "0.3", "--realtime", "--quiet", "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    summary = _json.loads((out / "summary.json").read_text())
+    assert summary["wall_time_s"] >= summary["sim_time_s"] - 1e-3
+    assert summary["real_time_factor"] <= 1.0 + 1e-2
