@@ -10,12 +10,13 @@ from .contact.friction_fit_cli import snakesim_add_commands  # noqa: F401  (hook
 from .contact.point_contact import PointContact
 from .examples.mass_spring import PointMass, SpringDamper
 from .examples.pendulum import Pendulum, ViscousDamper
+from .multibody import Multibody
 from .terrain import TerrainSource
 from .signals.blocks import Gain, Sum, ZeroOrderHold
 from .signals.sources import Constant, Sine, Step
 
 BUILTIN = (Constant, Step, Sine, Gain, Sum, ZeroOrderHold, Pendulum, ViscousDamper, PointMass, SpringDamper,
-           PointContact, TerrainSource)
+           PointContact, TerrainSource, Multibody)
 
 
 @hookimpl

@@ -131,6 +131,14 @@ class Component(Generic[P]):
         """out = x ⊕ dx on the state's manifold; Euclidean by default."""
         np.add(x, dx, out=out)
 
+    def dexp_inv(self, x0: np.ndarray, u: np.ndarray, k: np.ndarray) -> None:
+        """Map ``k``, a derivative evaluated at x0 ⊕ u, to the chart at x0, in place.
+
+        Multi-stage integrators combine stage derivatives in the chart at the
+        step's start (Munthe-Kaas RK); on a non-commutative manifold (SE(3))
+        they keep their order only with this correction. Identity by default.
+        """
+
     # -- services ------------------------------------------------------------
     def stop(self, reason: str) -> None:
         """End the run after this step with ``reason`` (e.g. a mobility failure)."""

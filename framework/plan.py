@@ -102,6 +102,11 @@ class Plan:
         for s in self._manifold:
             s.comp.integrate(X[s.x], dX[s.dx], out[s.x])
 
+    def dexp_inv(self, X0: np.ndarray, dX: np.ndarray, K: np.ndarray) -> None:
+        """Munthe-Kaas correction of a stage derivative K taken at X0 ⊕ dX (manifold states only)."""
+        for s in self._lie:
+            s.comp.dexp_inv(X0[s.x], dX[s.dx], K[s.dx])
+
     def second_order_pairs(self) -> list[tuple[slice, slice]]:
         """(position-tangent slice, velocity slice) in DX for each [q, v] state."""
         pairs = []
@@ -114,6 +119,7 @@ class Plan:
 
     def __post_init__(self):
         self._manifold = [s for s in self.slices if s.manifold]
+        self._lie = [s for s in self._manifold if type(s.comp).dexp_inv is not Component.dexp_inv]
 
     def component_of_x(self, index: int) -> str:
         for s in self.slices:

@@ -71,6 +71,7 @@ class Dopri5(Integrator):
                 self.dx *= h
                 sys.integrate(self.x0, self.dx, self.xs)
                 np.copyto(k[s], sys.f(t + C[s] * h, self.xs))
+                sys.dexp_inv(self.x0, self.dx, k[s])  # RKMK chart correction (manifold states)
             self.stats["f_evals"] += 6
             # 5th-order solution is the last stage's point (FSAL): xs = x0 ⊕ h·Σ b k
             np.dot(E, k, out=self.err)

@@ -38,6 +38,7 @@ class Rosenbrock2(FixedStep):
         self.x0 = np.zeros(nx)
         self.xs = np.zeros(nx)
         self.f0 = np.zeros(ndx)
+        self.f1 = np.zeros(ndx)
         self.k1 = np.zeros(ndx)
         self.k2 = np.zeros(ndx)
         self.dx = np.zeros(ndx)
@@ -73,7 +74,9 @@ class Rosenbrock2(FixedStep):
         self.k1[:] = sla.lu_solve(self.lu, self.f0, check_finite=False)
         np.multiply(self.k1, h, out=self.dx)
         sys.integrate(self.x0, self.dx, self.xs)
-        rhs = sys.f(t + h, self.xs) - 2.0 * self.k1
+        np.copyto(self.f1, sys.f(t + h, self.xs))
+        sys.dexp_inv(self.x0, self.dx, self.f1)  # chart correction at x0 (manifold states)
+        rhs = self.f1 - 2.0 * self.k1
         self.stats["f_evals"] += 1
         self.k2[:] = sla.lu_solve(self.lu, rhs, check_finite=False)
         np.multiply(self.k1, 1.5 * h, out=self.dx)

@@ -1,0 +1,336 @@
+"""Free-floating multibody (Pinocchio) from a URDF: the robot's rigid-body dynamics.
+
+A 6-DOF free-flyer at the URDF's root link (the tail), revolute/continuous
+joints, fixed joints and massless links merged into frames (paper 2.1.4),
+counter-rotating screw pairs (``<mimic multiplier="-1">``) as one DOF
+(paper 2.1.3, see :mod:`.model`).
+
+in   tau[nj]            N·m   joint torques, DOF joints in URDF order (default 0)
+     wrenches[nl, 6]    N, N·m external wrench on each URDF link (default 0):
+                        [f, τ] in WORLD axes, τ about the LINK ORIGIN
+     gravity[1] or [3]  params.gravity_input "scale": [s], gravity = s·params.gravity
+                        (0 off, 1 on); "vector": the gravity vector in m/s².
+                        Unconnected (or NaN): params.gravity
+out  state only (no feedthrough):
+     q[nq], v[nv]             Pinocchio coordinates (free-flyer v in the tail frame)
+     joint_q[nj], joint_v[nj] DOF joint angles (continuous joints wrapped to (-π, π]) and rates
+     link_poses[nl, 7]        [x, y, z, qx, qy, qz, qw] of each link frame, world
+     link_rotations[nl, 3, 3] link axes in the world
+     link_velocities[nl, 6]   [v of link origin, ω], world axes
+     momentum[6]              [P, L about the world origin] of all links, world
+     com[3]                   centre of mass, world
+     feedthrough from gravity only:
+     energy[2]                [kinetic (links + rotor armature), potential (-Σ m g·c)], J
+     feedthrough from all inputs:
+     a[nv]                    dv/dt
+     link_accelerations[nl,6] classical [a of link origin, α], world axes, gravity NOT included
+                              (an IMU reads a - g)
+     cut_wrenches[nc, 6]      for each cut in params.fts_cuts (a joint, fixed or moving, or a
+                              link): the wrench the parent side exerts on the child side, [f, τ]
+                              in the cut's child-link frame about its origin (paper 2.2.4)
+continuous state: [q, v] on the configuration manifold (pin.integrate), second order
+
+Links (nl) are the URDF's <link> elements in document order, massless
+frames included; DOF joints (nj) the moving joints that are not mimics, in
+URDF order (``link_names`` and ``joint_names`` on the component; with the
+usual parents-first URDF, v[6:] is in that order too).
+
+Integration: ``integrate`` is pin.integrate (the quaternion and the (cos, sin)
+of continuous joints stay on their manifolds). ``dexp_inv`` is the
+Munthe-Kaas stage correction an RK scheme needs to keep its order on SE(3);
+the framework's RK4 does not call it yet, and is then second order in the
+free-flyer orientation (see tests/multibody/test_conservation.py).
+
+Cost: Pinocchio 4.1 allocates O(nv³) derivative tensors in every Data: about
+2 GB and 3 s to build at 100 EELS-1.0 modules (nv = 306), negligible below
+30 modules. One Data per component.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Literal
+
+import numpy as np
+from pydantic import Field
+
+from snakesim.framework import Component, ContinuousState, Input, Output, Params
+
+from .layout import Layout, layout_of
+
+Vec3 = tuple[float, float, float]
+
+
+class MultibodyParams(Params):
+    # robot source: a URDF (text or path), or a snakesim.robots design (+ an optional user URDF path)
+    urdf: str | None = Field(None, description="URDF text or path")
+    design: str | None = Field(None, description="snakesim.robots design, e.g. eels-1.0")
+    modules: int | None = Field(None, ge=1, description="module count for a design")
+    head: bool | None = Field(None, description="head on/off for a design")
+    robot: dict[str, Any] = Field(default_factory=dict, description="generator parameters (hand, lead_angle, ...)")
+    # initial state
+    base_position: Vec3 = (0.0, 0.0, 0.0)
+    base_yaw: float = Field(0.0, description="rad about world z; ignored if base_quaternion is given")
+    base_quaternion: tuple[float, float, float, float] | None = Field(None, description="(x, y, z, w)")
+    base_velocity: tuple[float, float, float, float, float, float] = Field(
+        (0.0,) * 6, description="[v of tail origin, ω], world axes, m/s and rad/s")
+    q0: dict[str, float] | list[float] = Field(default_factory=dict, description="joint angles, by name/pattern or a vector")
+    v0: dict[str, float] | list[float] = Field(default_factory=dict, description="joint rates, by name/pattern or a vector")
+    # physics
+    gravity: Vec3 = (0.0, 0.0, -9.81)
+    gravity_input: Literal["scale", "vector"] = "scale"
+    armature: dict[str, float] = Field(default_factory=dict, description="kg·m² by joint name or pattern")
+    armature_per_effort: dict[str, float] = Field(
+        default_factory=dict, description="default armature per joint kind, kg·m² per N·m of the URDF effort "
+                                          "limit; overrides bend 2e-3, twist 2e-3, screw 7e-4, other 1e-3")
+    armature_floor: float = Field(1e-3, ge=0, description="kg·m², least default armature")
+    damping: dict[str, float] = Field(default_factory=dict, description="N·m·s/rad by joint name or pattern")
+    screw_pairs: Literal["auto", "embedded", "mimic_crba"] = "auto"
+    fts_cuts: list[str] = Field(default_factory=list, description="joint or link names/patterns for cut_wrenches")
+
+
+def _lay(p) -> Layout:
+    return layout_of(p)
+
+
+def _names(suffixes, of="links"):
+    def f(p):
+        base = getattr(_lay(p), of)
+        return tuple(f"{b}.{s}" for b in base for s in suffixes)
+    return f
+
+
+SIX = ("vx", "vy", "vz", "wx", "wy", "wz")
+
+
+class Multibody(Component[MultibodyParams]):
+    type_name = "multibody"
+    Params = MultibodyParams
+
+    tau = Input(shape=lambda p: (_lay(p).nj,), unit="N*m", default=0.0, names=lambda p: tuple(_lay(p).joints))
+    wrenches = Input(shape=lambda p: (_lay(p).nl, 6), unit=None, default=0.0,
+                     names=_names(("fx", "fy", "fz", "tx", "ty", "tz")))
+    gravity = Input(shape=lambda p: (1,) if p.gravity_input == "scale" else (3,), unit=None, default=np.nan)
+
+    q = Output(shape=lambda p: (_lay(p).nq,), unit=None, feedthrough=(), calc="calc_state",
+               names=lambda p: tuple(_lay(p).q_names))
+    v = Output(shape=lambda p: (_lay(p).nv,), unit=None, feedthrough=(), calc="calc_state",
+               names=lambda p: tuple(_lay(p).v_names))
+    joint_q = Output(shape=lambda p: (_lay(p).nj,), unit="rad", feedthrough=(), calc="calc_state",
+                     names=lambda p: tuple(_lay(p).joints))
+    joint_v = Output(shape=lambda p: (_lay(p).nj,), unit="rad/s", feedthrough=(), calc="calc_state",
+                     names=lambda p: tuple(_lay(p).joints))
+    link_poses = Output(shape=lambda p: (_lay(p).nl, 7), unit=None, feedthrough=(), calc="calc_state",
+                        names=_names(("x", "y", "z", "qx", "qy", "qz", "qw")))
+    link_rotations = Output(shape=lambda p: (_lay(p).nl, 3, 3), unit="1", feedthrough=(), calc="calc_state",
+                            names=_names(tuple(f"r{i}{j}" for i in range(3) for j in range(3))))
+    link_velocities = Output(shape=lambda p: (_lay(p).nl, 6), unit=None, feedthrough=(), calc="calc_state",
+                             names=_names(SIX))
+    momentum = Output(shape=(6,), unit=None, feedthrough=(), calc="calc_state",
+                      names=("px", "py", "pz", "lx", "ly", "lz"))
+    com = Output(shape=(3,), unit="m", feedthrough=(), calc="calc_state", names=("x", "y", "z"))
+    energy = Output(shape=(2,), unit="J", feedthrough=("gravity",), calc="calc_energy", names=("kinetic", "potential"))
+    a = Output(shape=lambda p: (_lay(p).nv,), unit=None, feedthrough=True, names=lambda p: tuple(_lay(p).v_names))
+    link_accelerations = Output(shape=lambda p: (_lay(p).nl, 6), unit=None, feedthrough=True,
+                                names=_names(("ax", "ay", "az", "alphax", "alphay", "alphaz")))
+    cut_wrenches = Output(shape=lambda p: (len(_lay(p).cuts), 6), unit=None, feedthrough=True,
+                          names=_names(("fx", "fy", "fz", "tx", "ty", "tz"), of="cuts"))
+
+    # -- set-up ------------------------------------------------------------------------
+    def setup(self):
+        import pinocchio
+
+        from . import kernels
+        from .model import build_dynamics, choose_mode, tree_arrays
+
+        self._pin = pinocchio
+        p = self.p
+        if not np.all(np.isfinite(p.gravity)):
+            raise ValueError(f"{self.name}: gravity {p.gravity} must be finite")
+        lay = self._layout = layout_of(p)
+        self.link_names, self.joint_names, self.cut_names = list(lay.links), list(lay.joints), list(lay.cuts)
+        self._k = kernels
+        self.mode, self.mode_reason = choose_mode(p.screw_pairs, lay.groups)
+        self.armature_user = lay.armature(p)
+        self.damping_user = lay.damping(p)
+        self.dyn = build_dynamics(lay.tree, self.mode, self.armature_user, lay.groups)
+        model = self.dyn.model
+        if (model.nq, model.nv) != (lay.nq, lay.nv):
+            raise AssertionError("internal: model layout differs from the port layout")
+        lay.check_mass_matrix(self.dyn, self.name)
+        self._ta = tree_arrays(lay.tree, model)
+        nl, nq, nv = lay.nl, lay.nq, lay.nv
+        self._nq, self._nv = nq, nv
+        self._dof_v = np.array([model.joints[model.getJointId(j)].idx_v for j in lay.joints], dtype=np.int64)
+        jq = [model.joints[model.getJointId(j)] for j in lay.joints]
+        self._jq_idx = np.array([m.idx_q for m in jq], dtype=np.int64)
+        self._jq_cs = np.array([m.nq == 2 for m in jq], dtype=bool)
+        self._damp = np.array([self.damping_user.get(j, 0.0) for j in lay.joints])
+        self._arm_v = np.zeros(nv)
+        self._arm_v[self._dof_v] = [self.armature_user.get(j, 0.0) for j in lay.joints]
+        self._cut_links = np.array([lay.tree.link_index[c] for c in lay.cut_links], dtype=np.int64)
+        # kinematics buffers (state-dependent), reused across calls
+        self._R = np.zeros((nl, 3, 3))
+        self._p = np.zeros((nl, 3))
+        self._w = np.zeros((nl, 3))
+        self._vo = np.zeros((nl, 3))
+        self._aw = np.zeros((nl, 3))
+        self._thd = np.zeros(nl)
+        self._alpha = np.zeros((nl, 3))
+        self._ao = np.zeros((nl, 3))
+        self._S = np.zeros((nl, 6))
+        self._T = np.zeros(nv)
+        self._qdd = np.zeros(nv)
+        self._kin_x = np.full(nq + nv, np.nan)
+        self._g = np.array(p.gravity, dtype=float)
+        self._g_param = self._g.copy()
+        self._scale_mode = p.gravity_input == "scale"
+        self._set_gravity(self._g)
+        self._pending = None   # (x, tau, W, g) the last output() solved for
+        self._report = None
+        self._x0 = lay.initial_state(p, model)       # validated here, so errors name the component
+
+    def continuous_state(self):
+        return ContinuousState(self._x0.copy(), ndx=2 * self._nv,
+                               second_order=self._nv,
+                               names=tuple(self._layout.q_names + [f"{n}.v" for n in self._layout.v_names]))
+
+    def integrate(self, x, dx, out):
+        nq = self._nq
+        out[:nq] = self._pin.integrate(self.dyn.model, x[:nq], dx[:self._nv])
+        np.add(x[nq:], dx[self._nv:], out=out[nq:])
+
+    def dexp_inv(self, x0, u, k):
+        """RKMK hook: ``k`` (a derivative evaluated at x0 ⊕ u) -> the rate of u in the chart at x0, in place.
+
+        The free-flyer's q ⊕ u is q·exp6(u) on SE(3), and a body velocity ξ
+        at q·exp6(u) is u̇ = Jexp6(u)⁻¹ ξ in that chart; the other
+        coordinates (revolute angles, SO(2) of continuous joints, v) commute
+        and pass unchanged. A Runge-Kutta scheme that combines stage
+        derivatives in the chart at the step's start point keeps its order
+        on the manifold only with this correction (Munthe-Kaas); without it
+        classical RK4 is second order in the free-flyer's orientation.
+        """
+        k[:6] = np.linalg.solve(self._pin.Jexp6(np.ascontiguousarray(u[:6])), k[:6])
+
+    # -- hot path -----------------------------------------------------------------------
+    def _set_gravity(self, g):
+        self._g[:] = g
+        self.dyn.model.gravity.linear[:] = g
+
+    def _gravity_of(self, gin) -> np.ndarray:
+        if self._scale_mode:
+            s = gin[0]
+            g = self._g_param if s != s else s * self._g_param
+        else:
+            g = self._g_param if np.isnan(gin).any() else gin
+        if not np.array_equal(g, self._g):
+            self._set_gravity(g)
+        return self._g
+
+    def _kinematics(self, x):
+        if np.array_equal(x, self._kin_x):
+            return
+        t = self._ta
+        self._k.forward_kinematics(t.order, t.parent, t.jtype, t.R0, t.p0, t.axis, t.qidx, t.qkind, t.vidx,
+                                   t.mult, t.offset, x[:self._nq], x[self._nq:],
+                                   self._R, self._p, self._w, self._vo, self._aw, self._thd)
+        self._kin_x[:] = x
+
+    def _solve(self, x, u) -> np.ndarray:
+        """Generalised accelerations at (x, inputs) into self._qdd."""
+        nq = self._nq
+        q, v = x[:nq], x[nq:]
+        self._gravity_of(u.gravity)
+        T = self._T
+        T.fill(0.0)
+        T[self._dof_v] = u.tau - self._damp * v[self._dof_v]
+        W = u.wrenches
+        if W.any():
+            self._kinematics(x)
+            t = self._ta
+            self._k.generalized_forces(t.order, t.parent, t.jtype, t.vidx, t.mult, self._R, self._p, self._aw,
+                                       W, self._S, T)
+        self._qdd[:] = self.dyn.forward(q, v, T)
+        return self._qdd
+
+    def derivative(self, t, x, u, dx):
+        nv = self._nv
+        dx[:nv] = x[self._nq:]
+        pend, self._pending = self._pending, None
+        if pend is not None and np.array_equal(pend[0], x) and np.array_equal(pend[1], u.tau) \
+                and np.array_equal(pend[2], u.wrenches) and np.array_equal(pend[3], u.gravity, equal_nan=True):
+            dx[nv:] = self._qdd
+            return
+        dx[nv:] = self._solve(x, u)
+
+    # -- outputs ---------------------------------------------------------------------------
+    def calc_state(self, t, x, u, y):
+        nq = self._nq
+        y.q[:] = x[:nq]
+        y.v[:] = x[nq:]
+        q = x[:nq]
+        ang = q[self._jq_idx]
+        cs = self._jq_cs
+        if cs.any():
+            ang[cs] = np.arctan2(q[self._jq_idx[cs] + 1], q[self._jq_idx[cs]])
+        y.joint_q[:] = ang
+        y.joint_v[:] = x[nq:][self._dof_v]
+        self._kinematics(x)
+        k = self._k
+        k.poses(self._R, self._p, y.link_poses)
+        y.link_rotations[:] = self._R
+        y.link_velocities[:, :3] = self._vo
+        y.link_velocities[:, 3:] = self._w
+        t_ = self._ta
+        k.momentum_energy(self._R, self._p, self._w, self._vo, t_.mass, t_.com, t_.inertia, self._g_param,
+                          y.momentum, y.com, np.zeros(2))
+
+    def calc_energy(self, t, x, u, y):
+        g = self._gravity_of(u.gravity)
+        self._kinematics(x)
+        t_ = self._ta
+        h, c = np.zeros(6), np.zeros(3)
+        self._k.momentum_energy(self._R, self._p, self._w, self._vo, t_.mass, t_.com, t_.inertia, g, h, c, y.energy)
+        v = x[self._nq:]
+        y.energy[0] += 0.5 * float(self._arm_v @ (v * v))
+
+    def output(self, t, x, u, y):
+        qdd = self._solve(x, u)
+        self._pending = (x.copy(), np.array(u.tau, copy=True), np.array(u.wrenches, copy=True),
+                         np.array(u.gravity, copy=True))
+        y.a[:] = qdd
+        self._kinematics(x)
+        t_ = self._ta
+        k = self._k
+        nq = self._nq
+        k.accelerations(t_.order, t_.parent, t_.jtype, t_.vidx, t_.mult, self._R, self._p, self._w, self._aw,
+                        self._thd, x[nq:], qdd, self._alpha, self._ao)
+        y.link_accelerations[:, :3] = self._ao
+        y.link_accelerations[:, 3:] = self._alpha
+        if self._cut_links.size:
+            k.cut_wrenches(t_.order, t_.parent, self._R, self._p, self._w, self._alpha, self._ao, t_.mass, t_.com,
+                           t_.inertia, u.wrenches, self._g, self._S, self._cut_links, y.cut_wrenches)
+
+    # -- introspection ------------------------------------------------------------------------
+    def optimisation_report(self, timing: bool = True):
+        """The multibody optimisation (paper 2.1.4): links, joints and DOF before and after, and the
+        cost of one dynamics evaluation with and without it. A dict; ``print()`` gives a table."""
+        if self._report is None or (timing and not self._report.get("timed")):
+            from .report import optimisation_report
+            self._report = optimisation_report(self._layout, self.dyn, self.mode, self.mode_reason,
+                                               self.armature_user, timing=timing)
+        return self._report
+
+    def dof_index(self, joint: str) -> int:
+        """Index of a DOF joint in tau / joint_q / joint_v."""
+        try:
+            return self.joint_names.index(joint)
+        except ValueError:
+            raise KeyError(f"{self.name}: '{joint}' is not a DOF joint; DOF joints: {', '.join(self.joint_names)}") from None
+
+    def link_index(self, link: str) -> int:
+        """Row of a link in wrenches / link_poses / link_velocities / link_accelerations."""
+        try:
+            return self.link_names.index(link)
+        except ValueError:
+            raise KeyError(f"{self.name}: no link '{link}'; links: {', '.join(self.link_names)}") from None

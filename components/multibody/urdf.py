@@ -1,0 +1,272 @@
+"""URDF to a link tree: every link, every joint, mass properties, mimic relations.
+
+This is the *unoptimised* description (each URDF link a body, each joint a
+joint) that the multibody component keeps next to the Pinocchio model it
+integrates: the numba kernels in :mod:`.kernels` compute every link's pose,
+velocity and acceleration on it, and the inter-body wrench across any joint,
+fixed ones included (force-torque sensors, paper 2.2.4), which the optimised
+dynamics model -- where fixed joints and massless links are merged away --
+can no longer see.
+
+Conventions (those of URDF and Pinocchio): a joint's frame is its child
+link's frame; ``<origin>`` places it in the parent link's frame with
+``rpy`` = R_z(yaw) R_y(pitch) R_x(roll); revolute and continuous joints turn
+about ``<axis>`` (default +x, normalised here) by the joint angle. Supported
+joint types: revolute, continuous, fixed (the root gets a free-flyer from the
+component). Prismatic, floating and planar joints raise
+:class:`MultibodyModelError` naming the joint.
+"""
+
+from __future__ import annotations
+
+import math
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+SUPPORTED_JOINTS = ("revolute", "continuous", "fixed")
+
+
+class MultibodyModelError(ValueError):
+    """A robot description the multibody component cannot use; the message
+    names the source, the element and what would be valid."""
+
+
+def rpy_matrix(rpy) -> np.ndarray:
+    r, p, y = (float(a) for a in rpy)
+    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
+    rz = np.array([[cy, -sy, 0.0], [sy, cy, 0.0], [0.0, 0.0, 1.0]])
+    ry = np.array([[cp, 0.0, sp], [0.0, 1.0, 0.0], [-sp, 0.0, cp]])
+    rx = np.array([[1.0, 0.0, 0.0], [0.0, cr, -sr], [0.0, sr, cr]])
+    return rz @ ry @ rx
+
+
+@dataclass
+class Joint:
+    name: str
+    type: str                      # revolute | continuous | fixed
+    parent: str
+    child: str
+    rotation: np.ndarray           # origin rotation, parent link frame
+    translation: np.ndarray        # origin translation, parent link frame
+    axis: np.ndarray               # unit axis, joint frame (unused for fixed)
+    mimic: tuple[str, float, float] | None = None   # (joint, multiplier, offset)
+    effort: float = 0.0            # <limit effort>, N·m (0 when absent)
+
+    @property
+    def moving(self) -> bool:
+        return self.type != "fixed"
+
+    @property
+    def is_dof(self) -> bool:
+        """A generalised coordinate of its own (moving and not a mimic)."""
+        return self.moving and self.mimic is None
+
+
+@dataclass
+class Link:
+    name: str
+    mass: float = 0.0
+    com: np.ndarray = field(default_factory=lambda: np.zeros(3))        # link frame
+    inertia: np.ndarray = field(default_factory=lambda: np.zeros((3, 3)))  # about the COM, link axes
+
+    @property
+    def massless(self) -> bool:
+        return self.mass <= 0.0
+
+
+@dataclass
+class LinkTree:
+    """Links and joints in document order, plus the tree relations."""
+
+    name: str
+    source: str
+    links: list[Link]
+    joints: list[Joint]
+    root: str
+    parent_joint: dict[str, Joint]            # child link -> its joint
+    children: dict[str, list[Joint]]          # link -> joints to its children (document order)
+    link_index: dict[str, int]
+    joint_by_name: dict[str, Joint]
+
+    # -- derived views ---------------------------------------------------------
+    def topological(self) -> list[str]:
+        """Links depth-first from the root, children in joint document order."""
+        out, stack = [], [self.root]
+        while stack:
+            name = stack.pop()
+            out.append(name)
+            stack.extend(j.child for j in reversed(self.children.get(name, [])))
+        return out
+
+    def subtree(self, link: str) -> list[str]:
+        out, stack = [], [link]
+        while stack:
+            name = stack.pop()
+            out.append(name)
+            stack.extend(j.child for j in self.children.get(name, []))
+        return out
+
+    def rigid_root(self, link: str) -> str:
+        """The link heading the rigid group ``link`` belongs to (walk up fixed joints)."""
+        while link in self.parent_joint and not self.parent_joint[link].moving:
+            link = self.parent_joint[link].parent
+        return link
+
+    def dof_joints(self) -> list[Joint]:
+        return [j for j in self.joints if j.is_dof]
+
+    def mimics_of(self, name: str) -> list[Joint]:
+        return [j for j in self.joints if j.mimic is not None and j.mimic[0] == name]
+
+    def placement_in(self, ancestor: str, link: str) -> tuple[np.ndarray, np.ndarray]:
+        """(R, p) of ``link`` in ``ancestor``'s frame through fixed joints only, at zero angles."""
+        r, p = np.eye(3), np.zeros(3)
+        while link != ancestor:
+            j = self.parent_joint[link]
+            r, p = j.rotation @ r, j.rotation @ p + j.translation
+            link = j.parent
+        return r, p
+
+
+def _floats(text: str | None, n: int, default, where: str, what: str) -> np.ndarray:
+    if text is None:
+        return np.array(default, dtype=float)
+    parts = text.split()
+    try:
+        vals = np.array([float(s) for s in parts])
+    except ValueError:
+        raise MultibodyModelError(f"{where}: {what}='{text}' is not {n} numbers") from None
+    if vals.size != n or not np.all(np.isfinite(vals)):
+        raise MultibodyModelError(f"{where}: {what}='{text}' must be {n} finite numbers")
+    return vals
+
+
+def _origin(el, where: str) -> tuple[np.ndarray, np.ndarray]:
+    o = el.find("origin") if el is not None else None
+    if o is None:
+        return np.eye(3), np.zeros(3)
+    xyz = _floats(o.get("xyz"), 3, (0, 0, 0), where, "origin xyz")
+    rpy = _floats(o.get("rpy"), 3, (0, 0, 0), where, "origin rpy")
+    return rpy_matrix(rpy), xyz
+
+
+def read_urdf_text(urdf: str) -> tuple[str, str]:
+    """(text, source label) from URDF text or a file path."""
+    if urdf.lstrip().startswith("<"):
+        return urdf, "<urdf text>"
+    path = Path(urdf).expanduser()
+    if not path.is_file():
+        raise MultibodyModelError(f"URDF file '{urdf}' does not exist (give a path to a .urdf file or the URDF text)")
+    return path.read_text(encoding="utf-8"), str(path)
+
+
+def parse_urdf(text: str, source: str = "<urdf text>") -> LinkTree:
+    try:
+        robot = ET.fromstring(text)
+    except ET.ParseError as e:
+        line, col = e.position
+        raise MultibodyModelError(f"{source}:{line}:{col}: malformed XML ({e})") from None
+    if robot.tag != "robot":
+        raise MultibodyModelError(f"{source}: root element is <{robot.tag}>, a URDF needs <robot>")
+
+    links: list[Link] = []
+    seen: set[str] = set()
+    for el in robot.findall("link"):
+        name = el.get("name")
+        if not name:
+            raise MultibodyModelError(f"{source}: a <link> has no name")
+        if name in seen:
+            raise MultibodyModelError(f"{source}: link '{name}' is defined twice")
+        seen.add(name)
+        link = Link(name)
+        inertial = el.find("inertial")
+        where = f"{source}: link '{name}' <inertial>"
+        if inertial is not None:
+            m = inertial.find("mass")
+            mass = float(_floats(m.get("value") if m is not None else None, 1, (0.0,), where, "mass value")[0])
+            if mass < 0:
+                raise MultibodyModelError(f"{where}: mass {mass} is negative")
+            rot, xyz = _origin(inertial, where)
+            it = inertial.find("inertia")
+            vals = {k: 0.0 for k in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")}
+            if it is not None:
+                for k in vals:
+                    if it.get(k) is not None:
+                        vals[k] = float(_floats(it.get(k), 1, (0.0,), where, k)[0])
+            i_local = np.array([[vals["ixx"], vals["ixy"], vals["ixz"]],
+                                [vals["ixy"], vals["iyy"], vals["iyz"]],
+                                [vals["ixz"], vals["iyz"], vals["izz"]]])
+            if np.any(np.linalg.eigvalsh(i_local) < -1e-12 * max(1.0, np.abs(i_local).max())):
+                raise MultibodyModelError(f"{where}: inertia tensor is not positive semi-definite ({vals})")
+            link.mass, link.com, link.inertia = mass, xyz, rot @ i_local @ rot.T
+        links.append(link)
+    if not links:
+        raise MultibodyModelError(f"{source}: the URDF has no <link>")
+
+    joints: list[Joint] = []
+    jseen: set[str] = set()
+    parent_joint: dict[str, Joint] = {}
+    for el in robot.findall("joint"):
+        name, jtype = el.get("name"), el.get("type")
+        where = f"{source}: joint '{name}'"
+        if not name:
+            raise MultibodyModelError(f"{source}: a <joint> has no name")
+        if name in jseen:
+            raise MultibodyModelError(f"{where} is defined twice")
+        jseen.add(name)
+        if jtype not in SUPPORTED_JOINTS:
+            raise MultibodyModelError(f"{where}: type '{jtype}' is not supported by the multibody component "
+                                      f"(supported: {', '.join(SUPPORTED_JOINTS)})")
+        p_el, c_el = el.find("parent"), el.find("child")
+        parent = p_el.get("link") if p_el is not None else None
+        child = c_el.get("link") if c_el is not None else None
+        for role, ln in (("parent", parent), ("child", child)):
+            if ln not in seen:
+                raise MultibodyModelError(f"{where}: {role} link '{ln}' is not a <link> of the URDF")
+        if child in parent_joint:
+            raise MultibodyModelError(f"{where}: link '{child}' already has a parent joint "
+                                      f"'{parent_joint[child].name}' (a URDF is a tree)")
+        rot, xyz = _origin(el, where)
+        axis = _floats(el.find("axis").get("xyz") if el.find("axis") is not None else None, 3, (1, 0, 0), where, "axis xyz")
+        if jtype != "fixed":
+            n = np.linalg.norm(axis)
+            if n < 1e-12:
+                raise MultibodyModelError(f"{where}: axis is zero")
+            axis = axis / n
+        mimic = None
+        mi = el.find("mimic")
+        if mi is not None and jtype != "fixed":
+            mult = float(_floats(mi.get("multiplier"), 1, (1.0,), where, "mimic multiplier")[0])
+            off = float(_floats(mi.get("offset"), 1, (0.0,), where, "mimic offset")[0])
+            mimic = (mi.get("joint"), mult, off)
+        lim = el.find("limit")
+        effort = float(lim.get("effort", 0.0)) if lim is not None else 0.0
+        j = Joint(name, jtype, parent, child, rot, xyz, axis, mimic, effort)
+        joints.append(j)
+        parent_joint[child] = j
+    by_name = {j.name: j for j in joints}
+    for j in joints:
+        if j.mimic is not None:
+            target = by_name.get(j.mimic[0])
+            if target is None or not target.moving:
+                raise MultibodyModelError(f"{source}: joint '{j.name}' mimics '{j.mimic[0]}', which is not a "
+                                          "revolute or continuous joint of the URDF")
+            if target.mimic is not None:
+                raise MultibodyModelError(f"{source}: joint '{j.name}' mimics '{target.name}', itself a mimic "
+                                          "joint; mimic the primary joint directly")
+
+    roots = [ln.name for ln in links if ln.name not in parent_joint]
+    if len(roots) != 1:
+        raise MultibodyModelError(f"{source}: a URDF tree has exactly one root link; found {len(roots)}: "
+                                  f"{', '.join(roots) or 'none (a cycle)'}")
+    children: dict[str, list[Joint]] = {}
+    for j in joints:
+        children.setdefault(j.parent, []).append(j)
+    tree = LinkTree(robot.get("name", "robot"), source, links, joints, roots[0], parent_joint, children,
+                    {ln.name: i for i, ln in enumerate(links)}, by_name)
+    if len(tree.topological()) != len(links):
+        raise MultibodyModelError(f"{source}: links are not all connected to the root '{roots[0]}' (a cycle?)")
+    return tree
