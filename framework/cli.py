@@ -16,7 +16,8 @@ import click
 
 from .errors import SnakesimError
 from .registry import default_registry
-from .session import load_session
+from .assembly import resolve
+from .session import Session
 
 
 def _fail(e: Exception):
@@ -33,13 +34,20 @@ def _progress(stream=None):
     return report
 
 
-def _session(assembly, config, sets, shorthands=None, **sim):
+def _session(assembly, config, sets, extras=None, **sim):
+    """Resolve, let plugin run options edit the configuration, build."""
     reg = default_registry()
+    extras = {k: v for k, v in (extras or {}).items() if v is not None}
     # shorthand options (--robot, --modules, ...) are --set items, placed before the explicit ones
-    sets = [f"{key}={value}" for key, value in (shorthands or {}).items() if value is not None] + list(sets)
+    sets = [f"{_SHORTHANDS[k]}={v}" for k, v in extras.items() if k in _SHORTHANDS] + list(sets)
     if assembly is None:
         assembly = reg.default_assembly()
-    return load_session(assembly, config_files=config, overrides=sets, sim_overrides=sim, registry=reg)
+    resolved = resolve(assembly, search_path=reg.assembly_paths(), config_files=config, overrides=sets,
+                       sim_overrides=sim)
+    for name, value in extras.items():
+        if name in _RUN_OPTIONS:
+            _RUN_OPTIONS[name](resolved, value)
+    return Session(resolved, reg)
 
 
 def _positive(ctx, param, value):
@@ -74,7 +82,7 @@ def cli():
 def run(assembly, config, sets, duration, dt, integrator, realtime, out_dir, save_config, quiet, **shorthands):
     """Run ASSEMBLY (a YAML path or a scene name; default: the default scene)."""
     try:
-        s = _session(assembly, config, sets, _shorthand_keys(shorthands), duration=duration, dt=dt, integrator=integrator, realtime=realtime)
+        s = _session(assembly, config, sets, shorthands, duration=duration, dt=dt, integrator=integrator, realtime=realtime)
         if save_config:
             Path(save_config).write_text(s.config_text())
         if not quiet:
@@ -100,7 +108,7 @@ def run(assembly, config, sets, duration, dt, integrator, realtime, out_dir, sav
 def check(assembly, config, sets, as_json, **shorthands):
     """Build ASSEMBLY and report it without running."""
     try:
-        s = _session(assembly, config, sets, _shorthand_keys(shorthands))
+        s = _session(assembly, config, sets, shorthands)
     except SnakesimError as e:
         _fail(e)
     r = s.report()
@@ -153,18 +161,15 @@ def graph(assembly, config, sets, output, **shorthands):
     if Path(output).suffix.lower() not in (".svg", ".png"):
         raise click.BadParameter(f"'{output}': the picture must end in .svg or .png", param_hint="-o")
     try:
-        s = _session(assembly, config, sets, _shorthand_keys(shorthands))
+        s = _session(assembly, config, sets, shorthands)
         draw(s, Path(output))
     except SnakesimError as e:
         _fail(e)
     click.echo(f"wrote {output}", err=True)
 
 
-_SHORTHANDS: dict[str, str] = {}
-
-
-def _shorthand_keys(values: dict) -> dict:
-    return {_SHORTHANDS[name]: v for name, v in values.items() if name in _SHORTHANDS}
+_SHORTHANDS: dict[str, str] = {}   # option name -> --set key
+_RUN_OPTIONS: dict[str, object] = {}  # option name -> apply(resolved, value)
 
 
 def install_plugin_cli(registry=None) -> click.Group:
@@ -179,6 +184,10 @@ def install_plugin_cli(registry=None) -> click.Group:
             _SHORTHANDS[name] = key
             for cmd in (run, check, graph):
                 cmd.params.append(click.Option([option, name], default=None, help=f"{help_text} (= --set {key}=…)"))
+    for group in reg.pm.hook.snakesim_run_options():
+        for option, apply in group:
+            _RUN_OPTIONS[option.name] = apply
+            run.params.append(option)
     cli._plugins_installed = True
     return cli
 

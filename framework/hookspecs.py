@@ -34,3 +34,12 @@ def snakesim_add_commands(cli):
 @hookspec
 def snakesim_cli_shorthands():
     """Return ``(option, key.path, help)`` triples: ``--option V`` means ``--set key.path=V``."""
+
+
+@hookspec
+def snakesim_run_options():
+    """Return ``(click.Option, apply)`` pairs for ``run``/``check``.
+
+    ``apply(resolved, value)`` edits the resolved configuration before it is
+    built when the option is given (e.g. ``--viz`` adds a viewer sink).
+    """

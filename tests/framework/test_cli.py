@@ -139,3 +139,37 @@ def test_realtime_paces_simulated_time_to_the_wall_clock(tmp_path):
     summary = _json.loads((out / "summary.json").read_text())
     assert summary["wall_time_s"] >= summary["sim_time_s"] - 1e-3
     assert summary["real_time_factor"] <= 1.0 + 1e-2
+
+
+def test_plugin_run_option_edits_the_resolved_config(tmp_path, monkeypatch):
+    """A plugin's run option (the mechanism behind --viz) changes the configuration
+    before the build: here it lengthens the pendulum, which changes its period."""
+    import json as _json
+
+    import click
+    from click.testing import CliRunner
+
+    from snakesim.framework import cli as cli_mod
+    from snakesim.framework.hookspecs import hookimpl
+    from snakesim.framework.registry import build_registry
+
+    class LengthPlugin:
+        @hookimpl
+        def snakesim_run_options(self):
+            def apply(resolved, value):
+                spec = resolved.components["pend"]
+                resolved.components["pend"] = spec.model_copy(update={"params": {**spec.params, "length": value}})
+            return [(click.Option(["--pend-length"], type=float, default=None), apply)]
+
+    reg = build_registry()
+    reg.pm.register(LengthPlugin())
+    monkeypatch.setattr(cli_mod.run, "params", list(cli_mod.run.params))
+    monkeypatch.setattr(cli_mod, "_RUN_OPTIONS", {})
+    monkeypatch.setattr(cli_mod.cli, "_plugins_installed", False, raising=False)
+    cli_mod.install_plugin_cli(reg)
+    out = tmp_path / "o"
+    res = CliRunner().invoke(cli_mod.cli, ["run", "pendulum", "--pend-length", "4.0", "--duration", "0.1",
+                                           "--quiet", "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    assert "length: 4.0" in (out / "config.yaml").read_text()
+    assert _json.loads((out / "summary.json").read_text())["completed"]
