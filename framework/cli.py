@@ -111,9 +111,9 @@ def check(assembly, config, sets, as_json, **shorthands):
         s = _session(assembly, config, sets, shorthands)
     except SnakesimError as e:
         _fail(e)
-    r = s.report()
+    r = s.report(detail=True)
     if as_json:
-        click.echo(json.dumps(r, indent=2))
+        click.echo(json.dumps(r, indent=2, default=str))
         return
     click.echo(f"{r['source']}: {len(r['components'])} components, {r['connections']} connections")
     for n, c in r["components"].items():
@@ -124,6 +124,8 @@ def check(assembly, config, sets, as_json, **shorthands):
     click.echo(f"state: {st['continuous']} continuous ({st['tangent']} tangent), {st['discrete']} discrete; "
                f"dt = {r['dt']:g} s, integrator {r['integrator']}")
     click.echo("evaluation order: " + " -> ".join(r["evaluation_order"]))
+    for name, rep in r.get("component_reports", {}).items():
+        click.echo(f"\n{name}:\n{rep}")
 
 
 @cli.command()

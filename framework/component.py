@@ -139,6 +139,10 @@ class Component(Generic[P]):
         they keep their order only with this correction. Identity by default.
         """
 
+    def build_report(self) -> dict | None:
+        """Extra facts for ``snakesim check`` (e.g. a model optimisation); may be costly, asked on demand."""
+        return None
+
     # -- services ------------------------------------------------------------
     def stop(self, reason: str) -> None:
         """End the run after this step with ``reason`` (e.g. a mobility failure)."""

@@ -42,10 +42,14 @@ class Session:
     def config_text(self) -> str:
         return "# snakesim resolved configuration: run again with `snakesim run THIS_FILE`\n" + dump_yaml(self.config_dict())
 
-    def report(self) -> dict:
+    def report(self, detail: bool = False) -> dict:
+        """The build report; ``detail`` adds each component's own ``build_report()``."""
         r = dict(self.plan.report)
         r["integrator"] = self.integrator.name
         r["source"] = self.resolved.source
+        if detail:
+            extra = {n: c.build_report() for n, c in self.plan.components.items()}
+            r["component_reports"] = {n: rep for n, rep in extra.items() if rep}
         return r
 
     # -- running ---------------------------------------------------------------

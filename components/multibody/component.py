@@ -312,6 +312,10 @@ class Multibody(Component[MultibodyParams]):
                            t_.inertia, u.wrenches, self._g, self._S, self._cut_links, y.cut_wrenches)
 
     # -- introspection ------------------------------------------------------------------------
+    def build_report(self):
+        """``snakesim check`` shows the multibody optimisation with its timing."""
+        return self.optimisation_report(timing=True)
+
     def optimisation_report(self, timing: bool = True):
         """The multibody optimisation (paper 2.1.4): links, joints and DOF before and after, and the
         cost of one dynamics evaluation with and without it. A dict; ``print()`` gives a table."""
