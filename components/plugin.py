@@ -32,6 +32,7 @@ def snakesim_cli_shorthands():
     return [
         ("--robot", "robot.name", "Robot design (eels-concept, eels-1.0, eels-1.0-front, eels-1.5, mini-eels-1.0)"),
         ("--modules", "robot.modules", "Number of modules"),
+        ("--head", "robot.head", "Perception head / cap on or off (true/false; default: the design's)"),
         ("--urdf", "robot.urdf", "Your URDF, checked against the chosen design's structure"),
         ("--terrain", "terrain", "Terrain: a name in terrains/ or a YAML/mesh path"),
     ]

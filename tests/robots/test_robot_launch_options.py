@@ -102,3 +102,11 @@ def test_bad_launch_options_are_clear_errors(snakesim, args, expected):
     assert "robot-zero-g.yaml" in res.output and "Traceback" not in res.output
     for text in expected:
         assert text in res.output
+
+
+def test_head_is_a_launch_option(snakesim):
+    """eels-1.0's perception head adds a link and fixed frames but no DOF."""
+    with_head = _check(snakesim, "--head", "true")["component_reports"]["robot"]
+    without = _check(snakesim, "--head", "false")["component_reports"]["robot"]
+    assert with_head["before"]["links"] > without["before"]["links"]
+    assert with_head["after"]["dof"] == without["after"]["dof"] == 36
