@@ -185,11 +185,14 @@ def install_plugin_cli(registry=None) -> click.Group:
             name = option.lstrip("-").replace("-", "_")
             _SHORTHANDS[name] = key
             for cmd in (run, check, graph):
+                if any(p.name == name for p in cmd.params):
+                    continue
                 cmd.params.append(click.Option([option, name], default=None, help=f"{help_text} (= --set {key}=…)"))
     for group in reg.pm.hook.snakesim_run_options():
         for option, apply in group:
             _RUN_OPTIONS[option.name] = apply
-            run.params.append(option)
+            if not any(p.name == option.name for p in run.params):
+                run.params.append(option)
     cli._plugins_installed = True
     return cli
 

@@ -203,17 +203,13 @@ def _cycle(nodes: list[Node], edges: dict[int, list[tuple[int, PortRef, PortRef]
     return "?"
 
 
-# -- the build -----------------------------------------------------------------
+# -- the build, stage by stage ----------------------------------------------------
 
-def build(resolved: Resolved, registry) -> Plan:
-    dt = resolved.sim.dt
-    comps = _instantiate(resolved, registry)
-    infos = {name: port_infos(c) for name, c in comps.items()}
-
-    # connections ---------------------------------------------------------------
+def _wire(connections, comps, infos) -> dict[PortRef, PortRef]:
+    """Parse and check every connection; return input -> upstream output."""
     sources: dict[PortRef, PortRef] = {}
     where_of: dict[PortRef, str] = {}
-    for s, t, where in resolved.connections:
+    for s, t, where in connections:
         src = parse_ref(s, comps, "output", where)
         dst = parse_ref(t, comps, "input", where)
         if dst in sources:
@@ -222,56 +218,42 @@ def build(resolved: Resolved, registry) -> Plan:
         check_compatible(src, infos[src.comp][src.port], dst, infos[dst.comp][dst.port], where)
         sources[dst] = src
         where_of[dst] = where
-
     missing = [PortRef(n, i) for n, c in comps.items() for i, p in c.inputs.items()
                if p.required and PortRef(n, i) not in sources]
     if missing:
         lines = [f"  {m} ({comps[m.comp].type_name}, {infos[m.comp][m.port].describe()})" for m in missing]
         raise BuildError("required inputs are not connected:\n" + "\n".join(lines)
                          + "\nconnect each with 'source.output -> component.input'")
+    return sources
 
-    recorded = [(parse_ref(r, comps, "output", w), w) for r, w in resolved.record]
-    for ref, w in recorded:
-        if isinstance(infos[ref.comp][ref.port].signal, Structured):
-            raise BuildError(f"record {ref} ({w}): only numeric ports can be recorded")
-    stop_refs = [(parse_ref(s.signal, comps, "output", w), s, w) for s, w in resolved.stop]
 
-    # pruning: keep what reaches a state, a sink, a recorder or a stop condition -
-    cstates = {n: c.continuous_state() for n, c in comps.items()}
-    dstates = {n: c.discrete_state() for n, c in comps.items()}
-    needed = {n for n, c in comps.items() if c.is_sink or cstates[n] is not None or dstates[n] is not None}
-    needed |= {r.comp for r, _ in recorded} | {r.comp for r, _, _ in stop_refs}
+def _prune(comps, sources, roots: set[str]) -> list[str]:
+    """Names of components none of whose outputs reach a root (state, sink, recorder, stop)."""
     upstream = defaultdict(set)
     for dst, src in sources.items():
         upstream[dst.comp].add(src.comp)
-    todo = list(needed)
+    needed, todo = set(roots), list(roots)
     while todo:
-        n = todo.pop()
-        for m in upstream[n]:
+        for m in upstream[todo.pop()]:
             if m not in needed:
                 needed.add(m)
                 todo.append(m)
-    pruned = [n for n in comps if n not in needed]
-    comps = {n: c for n, c in comps.items() if n in needed}
-    sources = {d: s for d, s in sources.items() if d.comp in needed}
+    return [n for n in comps if n not in needed]
 
-    # buffers -------------------------------------------------------------------
+
+def _bind(comps, infos, sources, stop_flag):
+    """Allocate output buffers; inputs become read-only views of them (or own defaults)."""
     out_buffers: dict[PortRef, object] = {}
     for n, c in comps.items():
         for p in c.outputs:
             info = infos[n][p]
-            ref = PortRef(n, p)
-            if isinstance(info.signal, Structured):
-                out_buffers[ref] = Cell(None)
-            else:
-                out_buffers[ref] = np.zeros(info.shape, dtype=info.signal.dtype)
-    stop_flag = StopFlag()
+            out_buffers[PortRef(n, p)] = (Cell(None) if isinstance(info.signal, Structured)
+                                          else np.zeros(info.shape, dtype=info.signal.dtype))
     u_of, y_of = {}, {}
     for n, c in comps.items():
         numeric_in, cells_in = {}, {}
         for i, port in c.inputs.items():
-            ref = PortRef(n, i)
-            info = infos[n][i]
+            ref, info = PortRef(n, i), infos[n][i]
             if ref in sources:
                 buf = out_buffers[sources[ref]]
             elif isinstance(info.signal, Structured):
@@ -291,9 +273,10 @@ def build(resolved: Resolved, registry) -> Plan:
         y_of[n] = make_namespace(n, "outputs", {p: b for p, b in mine.items() if not isinstance(b, Cell)},
                                  {p: b for p, b in mine.items() if isinstance(b, Cell)})
         c._stop = stop_flag
+    return out_buffers, u_of, y_of
 
-    # state layout: Euclidean states first so the integrator adds them in one slice
-    specs = []
+
+def _check_state_kinds(comps, cstates, dstates) -> None:
     for n, c in comps.items():
         cs, xd = cstates[n], dstates[n]
         if cs is not None and xd is not None:
@@ -302,40 +285,50 @@ def build(resolved: Resolved, registry) -> Plan:
             raise BuildError(f"{n} ({c.type_name}) has continuous state and a rate; rates are for discrete components")
         if xd is not None and c.rate is None:
             raise BuildError(f"{n} ({c.type_name}) has discrete state and needs a rate (Hz) in the assembly")
-        if cs is not None:
-            x0 = np.asarray(cs.x0, dtype=float).ravel()
-            if not np.all(np.isfinite(x0)):
-                raise BuildError(f"{n}: initial state is not finite: {x0}")
-            manifold = c.has_manifold_state() or cs.tangent_size != cs.nx
-            specs.append((manifold, n, c, cs, x0))
-    specs.sort(key=lambda s: s[0])  # stable: Euclidean first, definition order kept
-    nx = sum(s[4].size for s in specs)
-    ndx = sum(s[3].tangent_size for s in specs)
-    X, DX = np.zeros(nx), np.zeros(ndx)
+
+
+def _layout_continuous(comps, cstates):
+    """X and DX with one slice per component; Euclidean states first, so the
+    integrator adds them in one vector operation."""
+    specs = []
+    for n, c in comps.items():
+        cs = cstates[n]
+        if cs is None:
+            continue
+        x0 = np.asarray(cs.x0, dtype=float).ravel()
+        if not np.all(np.isfinite(x0)):
+            raise BuildError(f"{n}: initial state is not finite: {x0}")
+        specs.append((c.has_manifold_state() or cs.tangent_size != cs.nx, c, cs, x0))
+    specs.sort(key=lambda s: s[0])  # stable: definition order kept within each kind
+    X = np.zeros(sum(s[3].size for s in specs))
+    DX = np.zeros(sum(s[2].tangent_size for s in specs))
     slices, x_of, dx_of = [], {}, {}
-    ix = idx = 0
-    n_euclid = 0
-    for manifold, n, c, cs, x0 in specs:
+    ix = idx = n_euclid = 0
+    for manifold, c, cs, x0 in specs:
         sx, sdx = slice(ix, ix + x0.size), slice(idx, idx + cs.tangent_size)
         X[sx] = x0
-        x_of[n], dx_of[n] = X[sx], DX[sdx]
+        x_of[c.name], dx_of[c.name] = X[sx], DX[sdx]
         slices.append(StateSlice(c, sx, sdx, cs.second_order, manifold))
         if not manifold:
             n_euclid = sx.stop
         ix, idx = sx.stop, sdx.stop
-    XD = np.zeros(sum(np.asarray(dstates[n]).size for n in comps if dstates[n] is not None))
-    dslices, xd_of = {}, {}
-    i0 = 0
-    for n in comps:
-        if dstates[n] is not None:
-            v = np.asarray(dstates[n], dtype=float).ravel()
-            dslices[n] = slice(i0, i0 + v.size)
-            XD[dslices[n]] = v
-            xd_of[n] = XD[dslices[n]]
-            i0 += v.size
+    return X, DX, slices, x_of, dx_of, n_euclid
 
-    # nodes and their order --------------------------------------------------------
-    periods = {n: _period(c, dt) for n, c in comps.items()}
+
+def _layout_discrete(comps, dstates):
+    parts = {n: np.asarray(dstates[n], dtype=float).ravel() for n in comps if dstates[n] is not None}
+    XD = np.zeros(sum(v.size for v in parts.values()))
+    dslices, xd_of, i0 = {}, {}, 0
+    for n, v in parts.items():
+        dslices[n] = slice(i0, i0 + v.size)
+        XD[dslices[n]] = v
+        xd_of[n] = XD[dslices[n]]
+        i0 += v.size
+    return XD, dslices, xd_of
+
+
+def _nodes(comps, periods) -> tuple[list[Node], dict[PortRef, int]]:
+    """One node per output group: the ports without ``calc``, and each ``calc`` port."""
     nodes: list[Node] = []
     node_of_port: dict[PortRef, int] = {}
     for n, c in comps.items():
@@ -346,18 +339,21 @@ def build(resolved: Resolved, registry) -> Plan:
             deps = sorted({d for p in ports for d in c.outputs[p].feedthrough_inputs(list(c.inputs))},
                           key=list(c.inputs).index)
             method = getattr(c, calc) if calc else c.output
-            node = Node(c, method, tuple(ports), tuple(deps), periods[n], c.rate is not None or c.is_sink)
             for p in ports:
                 node_of_port[PortRef(n, p)] = len(nodes)
-            nodes.append(node)
+            nodes.append(Node(c, method, tuple(ports), tuple(deps), periods[n], c.rate is not None or c.is_sink))
+    return nodes, node_of_port
+
+
+def _topological_order(nodes, node_of_port, sources) -> list[int]:
+    """Kahn's algorithm over feedthrough edges (deterministic); a leftover cycle is an algebraic loop."""
     edges: dict[int, list] = defaultdict(list)
     indeg = [0] * len(nodes)
     for j, node in enumerate(nodes):
         for d in node.deps:
             ref = PortRef(node.comp.name, d)
             if ref in sources:
-                i = node_of_port[sources[ref]]
-                edges[i].append((j, sources[ref], ref))
+                edges[node_of_port[sources[ref]]].append((j, sources[ref], ref))
                 indeg[j] += 1
     ready = [j for j in range(len(nodes)) if indeg[j] == 0]
     order = []
@@ -370,15 +366,18 @@ def build(resolved: Resolved, registry) -> Plan:
             if indeg[j] == 0:
                 ready.append(j)
     if len(order) < len(nodes):
-        rest = [i for i in range(len(nodes)) if i not in set(order)]
-        sub = {i: [e for e in edges.get(i, ()) if e[0] in rest] for i in rest}
+        done = set(order)
+        rest = [i for i in range(len(nodes)) if i not in done]
         remap = {i: k for k, i in enumerate(rest)}
-        cyc = _cycle([nodes[i] for i in rest], {remap[i]: [(remap[j], s, d) for j, s, d in sub[i]] for i in rest})
-        raise BuildError(f"algebraic loop (each output feeds through to the next): {cyc}\n"
+        sub = {remap[i]: [(remap[j], s, d) for j, s, d in edges.get(i, ()) if j in remap] for i in rest}
+        raise BuildError(f"algebraic loop (each output feeds through to the next): {_cycle([nodes[i] for i in rest], sub)}\n"
                          "break it with a component whose output depends only on its state (a delay, a filter)")
+    return order
 
-    # which nodes continuous stages must re-evaluate --------------------------------
-    minor_set: set[int] = set()
+
+def _continuous_closure(slices, nodes, node_of_port, sources) -> set[int]:
+    """Nodes the continuous derivatives depend on, through feedthrough; discrete ones are held."""
+    minor: set[int] = set()
     todo = [PortRef(s.comp.name, i) for s in slices for i in s.comp.inputs]
     seen = set()
     while todo:
@@ -387,24 +386,59 @@ def build(resolved: Resolved, registry) -> Plan:
             continue
         seen.add(ref)
         j = node_of_port[sources[ref]]
-        if nodes[j].discrete or j in minor_set:
+        if nodes[j].discrete or j in minor:
             continue
-        minor_set.add(j)
+        minor.add(j)
         todo.extend(PortRef(nodes[j].comp.name, d) for d in nodes[j].deps)
+    return minor
+
+
+def _phase_count(periods: dict[str, int]) -> int:
+    n = 1
+    for p in periods.values():
+        n = n * p // math.gcd(n, p)
+    if n > MAX_PHASES:
+        raise BuildError(f"the component rates need {n} distinct tick patterns (> {MAX_PHASES}); choose rates "
+                         f"whose periods in base steps share factors (periods: {sorted(set(periods.values()))})")
+    return n
+
+
+def build(resolved: Resolved, registry) -> Plan:
+    dt = resolved.sim.dt
+    comps = _instantiate(resolved, registry)
+    infos = {name: port_infos(c) for name, c in comps.items()}
+    sources = _wire(resolved.connections, comps, infos)
+    recorded = [parse_ref(r, comps, "output", w) for r, w in resolved.record]
+    for ref, (_, w) in zip(recorded, resolved.record):
+        if isinstance(infos[ref.comp][ref.port].signal, Structured):
+            raise BuildError(f"record {ref} ({w}): only numeric ports can be recorded")
+    stopped = [parse_ref(s.signal, comps, "output", w) for s, w in resolved.stop]
+
+    cstates = {n: c.continuous_state() for n, c in comps.items()}
+    dstates = {n: c.discrete_state() for n, c in comps.items()}
+    roots = {n for n, c in comps.items() if c.is_sink or cstates[n] is not None or dstates[n] is not None}
+    roots |= {r.comp for r in recorded + stopped}
+    pruned = _prune(comps, sources, roots)
+    comps = {n: c for n, c in comps.items() if n not in pruned}
+    sources = {d: s for d, s in sources.items() if d.comp in comps}
+
+    stop_flag = StopFlag()
+    out_buffers, u_of, y_of = _bind(comps, infos, sources, stop_flag)
+    _check_state_kinds(comps, cstates, dstates)
+    X, DX, slices, x_of, dx_of, n_euclid = _layout_continuous(comps, cstates)
+    XD, dslices, xd_of = _layout_discrete(comps, dstates)
+
+    periods = {n: _period(c, dt) for n, c in comps.items()}
+    nodes, node_of_port = _nodes(comps, periods)
+    order = _topological_order(nodes, node_of_port, sources)
+    minor_set = _continuous_closure(slices, nodes, node_of_port, sources)
+    n_phases = _phase_count(periods)
 
     def call(node: Node):
         n = node.comp.name
-        x = x_of.get(n, xd_of.get(n))
-        return (node.method, x, u_of[n], y_of[n])
+        return (node.method, x_of.get(n, xd_of.get(n)), u_of[n], y_of[n])
 
     minor = [call(nodes[i]) for i in order if i in minor_set]
-    all_periods = [periods[n] for n in comps]
-    n_phases = 1
-    for p in all_periods:
-        n_phases = n_phases * p // math.gcd(n_phases, p)
-    if n_phases > MAX_PHASES:
-        raise BuildError(f"the component rates need {n_phases} distinct tick patterns (> {MAX_PHASES}); "
-                         f"choose rates whose periods in base steps share factors (periods: {sorted(set(all_periods))})")
     major = [[call(nodes[i]) for i in order if phase % nodes[i].period == 0] for phase in range(n_phases)]
     update_comps = [c for n, c in comps.items() if dstates[n] is not None or c.is_sink]
     updates = [[(c.update, xd_of.get(c.name), u_of[c.name]) for c in update_comps if phase % periods[c.name] == 0]
@@ -417,7 +451,7 @@ def build(resolved: Resolved, registry) -> Plan:
                            "discrete_states": int(xd_of[n].size) if n in xd_of else 0}
                        for n, c in comps.items()},
         "pruned": pruned,
-        "state_size": {"continuous": int(nx), "tangent": int(ndx), "discrete": int(XD.size)},
+        "state_size": {"continuous": int(X.size), "tangent": int(DX.size), "discrete": int(XD.size)},
         "evaluation_order": [nodes[i].label() for i in order],
         "continuous_stage_order": [nodes[i].label() for i in order if i in minor_set],
         "rates_hz": sorted({c.rate for c in comps.values() if c.rate is not None}),
