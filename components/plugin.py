@@ -8,15 +8,26 @@ from snakesim.framework import hookimpl
 
 from .contact.friction_fit_cli import snakesim_add_commands  # noqa: F401  (hookimpl: `snakesim fit-friction`)
 from .contact.point_contact import PointContact
+from .contact.hull import HullContact
+from .contact.screw_drive import ScrewDrive
+from .contact.screw_sdf import ScrewSdfContact
+from .control import CsvTrajectory, JointPid, JointSetpoints, JointSpringDamper, Schedule, SerpenoidGait
 from .examples.mass_spring import PointMass, SpringDamper
 from .examples.pendulum import Pendulum, ViscousDamper
+from .monitors import MobilityMonitor
 from .multibody import Multibody
 from .terrain import TerrainSource
 from .signals.blocks import Gain, Sum, ZeroOrderHold
 from .signals.sources import Constant, Sine, Step
+from .sensors import ForceTorqueSensors, Imu
+from .tethers import Tethers, WrenchSum
+from .viz import RerunSink
+from .viz.cli import viz_add_commands, viz_run_options  # noqa: F401  (hookimpls: --viz, `snakesim replay`)
 
 BUILTIN = (Constant, Step, Sine, Gain, Sum, ZeroOrderHold, Pendulum, ViscousDamper, PointMass, SpringDamper,
-           PointContact, TerrainSource, Multibody)
+           PointContact, HullContact, TerrainSource, Multibody, ScrewSdfContact, ScrewDrive,
+           JointPid, JointSpringDamper, JointSetpoints, SerpenoidGait, CsvTrajectory, Schedule, ForceTorqueSensors,
+           Imu, Tethers, WrenchSum, MobilityMonitor, RerunSink)
 
 
 @hookimpl

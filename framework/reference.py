@@ -18,7 +18,8 @@ def component_reference(registry) -> dict:
         doc = inspect.cleandoc(own) if own else inspect.getdoc(inspect.getmodule(cls)) or ""
         params = []
         for pname, f in cls.Params.model_fields.items():
-            default = f.get_default(call_default_factory=True)
+            # required parameters have no default: say so (and keep the reference JSON-clean)
+            default = "(required)" if f.is_required() else f.get_default(call_default_factory=True)
             params.append({"name": pname, "type": getattr(f.annotation, "__name__", str(f.annotation)),
                            "default": default, "description": f.description or ""})
         out[name] = {

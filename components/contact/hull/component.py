@@ -1,0 +1,313 @@
+"""Convex-hull contact back end (paper §2.2.2, fig. 4): coal collision of the robot's
+convex collision pieces with the terrain and with each other, forces by eqs. 2 and 6.
+
+hull_contact:
+    in   link_poses[nl,7]       [x, y, z, qx, qy, qz, qw] of each URDF link, world
+         link_velocities[nl,6]  [v of link origin, ω], world
+         joint_v[nj]            rad/s, accepted so the SDF back end's wiring fits unchanged;
+                                not read: the screw links' own velocities carry the spin
+         terrain                structured Terrain (the `terrain` component)
+    out  wrenches[nl,6]         N, N·m: [f, τ] on each link, world axes, τ about the LINK
+                                ORIGIN (the multibody's `wrenches` input)
+         normal_force[1]        N, Σ F_n over robot–terrain contacts
+         contacts[1]            robot–terrain contacts (penetrating pairs)
+         body_normal_force[1]   N, Σ F_n over body-to-body contacts
+         body_contacts[1]       body-to-body contacts (penetrating pairs)
+         contact_set            ContactSet of the robot–terrain contacts (contact_set.py)
+         (all feedthrough from all inputs)
+    The ports named as the SDF back end's (screw_sdf_contact) mean the same, so an
+    assembly swaps back ends by changing the type; the robot source and ``material``
+    override parameters are shared too.
+
+Geometry (robot_geometry.py, terrain_geometry.py, decompose.py): the URDF's collision
+shapes (screw envelope cylinders cut into ``cylinder_slices``, module cylinders, boxes;
+or the screws' helical blade mesh as ``blade_hulls`` convex hulls) against the terrain
+as coal half-spaces or triangle meshes; one contact per colliding pair (narrow.py).
+
+Forces — the SDF back end's kernels, so the two back ends differ only in geometry:
+
+    robot–terrain  F_n = max(0, k d + c ḋ) n̂ (eq. 2), friction eq. 6 with ê_v the thread
+                   normal at the contact (screw_samples.thread_direction, from the screw
+                   axis, the radial direction to the point, lead angle λ, hand) on screw
+                   links, isotropic (eq. 1) elsewhere; k, c, μ, ‖e_v‖ = a + b F_n from the
+                   terrain material under the point; slip regularised (v_ε, kernels.py)
+    body–body      eq. 2 + isotropic friction with body_stiffness, body_damping, body_mu;
+                   the force on b is F at the contact point, on a −F (equal and opposite)
+
+Velocity of the robot's material point at a contact p on link l: v_l + ω_l × (p − o_l);
+a screw link's ω includes its spin. k is per contact (per colliding piece), as in the
+SDF back end per sample: a body resting on n pieces sinks d = W / (n k) (c ḋ = 0 at rest).
+
+Broad phase: each piece's bounding sphere (centre, radius) in the world; a piece is
+tested against the terrain only when Terrain.distance_lower_bound(centre, radius) ≤ 0
+(one vectorised query for all pieces), a body pair only when the spheres overlap.
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+import numpy as np
+from pydantic import Field
+
+from snakesim.framework import Component, Input, Output
+from snakesim.components.terrain import Terrain
+
+from ..contact_set import ContactSet
+from ..kernels import EV_FLOOR, MODES
+from ..kernels_numba import body_wrenches_nb, contact_forces_nb
+from ..robot_screws import RobotSource
+from ..screw_sdf import MaterialOverride
+from .narrow import Narrowphase
+from .robot_geometry import build_robot_geometry
+from .terrain_geometry import terrain_parts
+
+
+class HullContactParams(RobotSource):
+    # robot source (urdf, design, modules, head, robot): the multibody's, give both the same
+    material: MaterialOverride | None = Field(None, description="overrides the terrain materials' k, c, mu, ev_a, ev_b")
+    # geometry
+    screw_geometry: Literal["envelope", "blades"] = Field(
+        "envelope", description="screws as their envelope cylinder, or the blade mesh's convex hulls")
+    cylinder_slices: int = Field(3, ge=1, description="pieces each collision cylinder is cut into")
+    blade_hulls: int = Field(8, ge=1, description="convex hulls per screw with screw_geometry: blades")
+    mesh_hulls: int = Field(4, ge=1, description="convex hulls per <mesh> collision element")
+    max_contacts: int = Field(8, ge=1, description="triangles coal reports per piece against a terrain mesh")
+    terrain_extent: float = Field(10.0, gt=0, description="m, half-length meshed of unbounded curved terrains")
+    terrain_segments: int = Field(64, ge=8, description="facets around curved terrains")
+    terrain_resolution: float = Field(0.05, gt=0, description="m, mesh spacing along curved terrains")
+    # body-to-body
+    body_contact: bool = True
+    min_module_gap: int = Field(2, ge=1, description="modules apart for two links to collide")
+    body_stiffness: float = Field(1e5, gt=0, description="N/m")
+    body_damping: float = Field(1e3, ge=0, description="N·s/m")
+    body_mu: float = Field(0.3, ge=0)
+    # friction regularisation (kernels.py)
+    v_eps: float = Field(1e-3, ge=0, description="m/s")
+    regularisation: Literal["sqrt", "linear"] = "sqrt"
+    ev_floor: float = Field(EV_FLOOR, gt=0)
+
+
+def _robot(p):
+    """(URDF text, source label, metadata or None, folder for relative mesh paths)."""
+    from pathlib import Path
+
+    from snakesim.components.multibody.layout import robot_text
+
+    text, source = robot_text(p)
+    if p.design is None:
+        base = Path(p.urdf).expanduser().parent if not p.urdf.lstrip().startswith("<") else Path(".")
+        return text, source, None, base
+    from snakesim.robots import load_robot
+
+    desc = load_robot(p.design, modules=p.modules, head=p.head, urdf=p.urdf, **p.robot)
+    return text, source, desc.metadata, desc.base_dir
+
+
+def _nl(p):
+    from snakesim.components.multibody.layout import layout_of
+    return layout_of(_Src(p)).nl
+
+
+def _nj(p):
+    from snakesim.components.multibody.layout import layout_of
+    return layout_of(_Src(p)).nj
+
+
+class _Src:
+    """The multibody's layout cache keyed on this component's robot source."""
+
+    def __init__(self, p):
+        self.urdf, self.design, self.modules, self.head, self.robot = p.urdf, p.design, p.modules, p.head, p.robot
+        self.fts_cuts = []
+
+
+def quat_to_R(q: np.ndarray) -> np.ndarray:
+    """(n,4) [x, y, z, w] -> (n,3,3)."""
+    x, y, z, w = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
+    return np.stack([
+        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], -1),
+        np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], -1),
+        np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], -1)], 1)
+
+
+class HullContact(Component[HullContactParams]):
+    type_name = "hull_contact"
+    Params = HullContactParams
+
+    link_poses = Input(shape=lambda p: (_nl(p), 7), unit=None)
+    link_velocities = Input(shape=lambda p: (_nl(p), 6), unit=None)
+    joint_v = Input(shape=lambda p: (_nj(p),), unit="rad/s", default=0.0)
+    terrain = Input(type=Terrain)
+    wrenches = Output(shape=lambda p: (_nl(p), 6), unit=None, feedthrough=True)
+    normal_force = Output(shape=(1,), unit="N", feedthrough=True)
+    contacts = Output(shape=(1,), unit="1", feedthrough=True)
+    body_normal_force = Output(shape=(1,), unit="N", feedthrough=True)
+    body_contacts = Output(shape=(1,), unit="1", feedthrough=True)
+    contact_set = Output(type=ContactSet, feedthrough=True, calc="calc_contact_set")
+
+    def setup(self):
+        p = self.p
+        text, source, meta, base = _robot(p)
+        self.geo = build_robot_geometry(
+            text, source, meta, base, cylinder_slices=p.cylinder_slices, screw_geometry=p.screw_geometry,
+            blade_hulls=p.blade_hulls, mesh_hulls=p.mesh_hulls, min_module_gap=p.min_module_gap)
+        if p.screw_geometry == "blades" and not (meta or {}).get("screws"):
+            raise ValueError(f"{self.name}: screw_geometry 'blades' needs a design with screws (got {source})")
+        import coal
+
+        self._T = [coal.Transform3s() for _ in range(self.geo.n_pieces)]
+        self._narrow = Narrowphase(p.max_contacts)
+        self._terrain, self._parts = None, []
+        self._mode = MODES[p.regularisation]
+        self.link_names = self.geo.link_names
+        self.last: dict[str, np.ndarray] = {}
+        self._seen = None
+
+    # -- geometry in the world ---------------------------------------------------------
+    def _pieces_world(self, poses):
+        g = self.geo
+        R = quat_to_R(poses[:, 3:])
+        Rl = R[g.piece_link]
+        Rw = Rl @ g.piece_R
+        pw = np.einsum("nij,nj->ni", Rl, g.piece_p) + poses[g.piece_link, :3]
+        cw = np.einsum("nij,nj->ni", Rl, g.sphere_c) + poses[g.piece_link, :3]
+        return R, Rw, pw, cw
+
+    def _terrain_contacts(self, terrain, Rw, pw, cw):
+        if terrain is not self._terrain:
+            p = self.p
+            self._parts = terrain_parts(terrain, p.terrain_extent, p.terrain_segments, p.terrain_resolution)
+            self._terrain = terrain
+        g = self.geo
+        near = np.flatnonzero(terrain.distance_lower_bound(cw, g.sphere_r) <= 0.0)
+        rows = []
+        for i in near:
+            T = self._T[i]
+            T.setRotation(Rw[i])
+            T.setTranslation(pw[i])
+            for part in self._parts:
+                hit = self._narrow.collide(g.geoms[i], T, part.geom, part.transform, part.triangles)
+                if hit is not None:
+                    # coal's normal points from the robot into the terrain
+                    rows.append((g.piece_link[i], hit[0], -hit[1], hit[2], part.triangles))
+        return rows
+
+    def _body_contacts(self, Rw, pw, cw):
+        g = self.geo
+        a, b = g.pair_a, g.pair_b
+        gap = np.linalg.norm(cw[a] - cw[b], axis=1) - g.sphere_r[a] - g.sphere_r[b]
+        rows = []
+        for k in np.flatnonzero(gap <= 0.0):
+            i, j = a[k], b[k]
+            for n in (i, j):
+                self._T[n].setRotation(Rw[n])
+                self._T[n].setTranslation(pw[n])
+            hit = self._narrow.collide(g.geoms[i], self._T[i], g.geoms[j], self._T[j], False)
+            if hit is not None:
+                rows.append((g.piece_link[i], g.piece_link[j], hit[0], hit[1], hit[2]))
+        return rows
+
+    # -- forces ----------------------------------------------------------------------------
+    def _velocity(self, link, points, poses, vel):
+        return vel[link, :3] + np.cross(vel[link, 3:], points - poses[link, :3])
+
+    def _thread_dirs(self, link, points, R, poses):
+        """ê_v at each contact: thread normal on screw links, 0 (isotropic) elsewhere."""
+        g = self.geo
+        hand, lead = g.screw_hand[link], g.screw_lead[link]
+        axis = R[link][:, :, 0]
+        r = points - poses[link, :3]
+        radial = r - np.einsum("ij,ij->i", r, axis)[:, None] * axis
+        radial /= np.maximum(np.linalg.norm(radial, axis=1), 1e-12)[:, None]
+        e = np.cos(lead)[:, None] * axis - (hand * np.sin(lead))[:, None] * np.cross(axis, radial)
+        return np.where((hand != 0)[:, None], e, 0.0)
+
+    def _materials(self, terrain):
+        o = self.p.material
+        out = []
+        for m in terrain.materials:
+            row = [m.k, m.c, m.mu, m.ev_a, m.ev_b]
+            if o is not None:
+                row = [v if ov is None else ov for v, ov in zip(row, (o.k, o.c, o.mu, o.ev_a, o.ev_b))]
+            out.append(row)
+        return out
+
+    def output(self, t, x, u, y):
+        p = self.p
+        poses, vel, terrain = u.link_poses, u.link_velocities, u.terrain
+        if terrain is None:
+            raise ValueError(f"{self.name}: input 'terrain' carries no Terrain; connect a terrain component's "
+                             "'terrain' output to it")
+        R, Rw, pw, cw = self._pieces_world(poses)
+        trows = self._terrain_contacts(terrain, Rw, pw, cw)
+        brows = self._body_contacts(Rw, pw, cw) if p.body_contact and len(self.geo.pair_a) else []
+
+        nt = len(trows)
+        t_link = np.array([r[0] for r in trows], dtype=np.int64)
+        t_depth = np.array([r[1] for r in trows], dtype=float)
+        t_normal = np.array([r[2] for r in trows], dtype=float).reshape(-1, 3)
+        t_point = np.array([r[3] for r in trows], dtype=float).reshape(-1, 3)
+        t_force, t_fn = np.zeros((nt, 3)), np.zeros(nt)
+        if nt:
+            q = terrain.query(t_point)
+            # triangles have no inside: orient their normals out of the solid
+            tri = np.array([r[4] for r in trows])
+            flip = tri & (np.einsum("ij,ij->i", t_normal, q.normal) < 0.0)
+            t_normal[flip] *= -1.0
+            v = self._velocity(t_link, t_point, poses, vel)
+            e = self._thread_dirs(t_link, t_point, R, poses)
+            mats = self._materials(terrain)
+            for m in np.unique(q.material):
+                sel = q.material == m
+                f, fn = np.empty((sel.sum(), 3)), np.empty(sel.sum())
+                contact_forces_nb(t_depth[sel], t_normal[sel], np.ascontiguousarray(v[sel]),
+                                  np.ascontiguousarray(e[sel]), *mats[m], p.v_eps, self._mode, p.ev_floor, f, fn)
+                t_force[sel], t_fn[sel] = f, fn
+
+        nb = len(brows)
+        b_a = np.array([r[0] for r in brows], dtype=np.int64)
+        b_b = np.array([r[1] for r in brows], dtype=np.int64)
+        b_depth = np.array([r[2] for r in brows], dtype=float)
+        b_normal = np.array([r[3] for r in brows], dtype=float).reshape(-1, 3)
+        b_point = np.array([r[4] for r in brows], dtype=float).reshape(-1, 3)
+        b_force, b_fn = np.zeros((nb, 3)), np.zeros(nb)
+        if nb:
+            v_rel = self._velocity(b_b, b_point, poses, vel) - self._velocity(b_a, b_point, poses, vel)
+            contact_forces_nb(b_depth, b_normal, v_rel, np.zeros((nb, 3)), p.body_stiffness, p.body_damping,
+                              p.body_mu, 1.0, 0.0, p.v_eps, self._mode, p.ev_floor, b_force, b_fn)
+
+        points = np.concatenate([t_point, b_point, b_point])
+        forces = np.concatenate([t_force, b_force, -b_force])
+        index = np.concatenate([t_link, b_b, b_a])
+        body_wrenches_nb(points, forces, np.ascontiguousarray(poses[:, :3]), index, y.wrenches)
+        y.normal_force[0] = t_fn.sum()
+        y.contacts[0] = nt
+        y.body_normal_force[0] = b_fn.sum()
+        y.body_contacts[0] = nb
+        self.last = {"t": t, "link": t_link, "point": t_point, "normal": t_normal, "depth": t_depth,
+                     "force": t_force, "fn": t_fn, "slip": v if nt else np.zeros((0, 3)),
+                     "material": q.material if nt else np.zeros(0, dtype=np.int64),
+                     "body_a": b_a, "body_b": b_b, "body_point": b_point, "body_normal": b_normal,
+                     "body_depth": b_depth, "body_force": b_force, "body_fn": b_fn}
+        self._seen = (terrain, poses.copy(), vel.copy())
+
+    def calc_contact_set(self, t, x, u, y):
+        s = self._seen
+        if s is None or not (u.terrain is s[0] and np.array_equal(u.link_poses, s[1])
+                             and np.array_equal(u.link_velocities, s[2])):
+            self.output(t, x, u, _Scratch(len(self.link_names)))    # the last evaluation was at other inputs
+        c = self.last
+        y.contact_set = ContactSet(t=float(t), points=c["point"].copy(), normals=c["normal"].copy(),
+                                   forces=c["force"].copy(), normal_force=c["fn"].copy(), depth=c["depth"].copy(),
+                                   slip=c["slip"].copy(), link=c["link"].copy(), material=c["material"].copy(),
+                                   link_names=tuple(self.link_names))
+
+
+class _Scratch:
+    """Output buffers for an evaluation whose numeric outputs nobody reads."""
+
+    def __init__(self, nl):
+        self.wrenches = np.zeros((nl, 6))
+        self.normal_force, self.contacts = np.zeros(1), np.zeros(1)
+        self.body_normal_force, self.body_contacts = np.zeros(1), np.zeros(1)
