@@ -1,6 +1,8 @@
 """Screw–terrain contact (paper §2.2.2): penalty normal force, isotropic and anisotropic
 friction kernels (numpy and numba), screw contact samples, the analytic screw-pair steady
-speed, and the fig. 6 friction fit (``snakesim fit-friction``)."""
+speed, the fig. 6 friction fit (``snakesim fit-friction``), and the SDF back end
+(``screw_sdf_contact``: screw samples against the terrain SDF) with a stand-in screw
+speed drive (``screw_drive``)."""
 
 from .kernels import (anisotropic_friction, contact_forces, ev_magnitude, isotropic_friction, normal_force,
                       slip_direction, tangent_axis, tangential_velocity)
@@ -9,8 +11,13 @@ from .materials import FrictionMaterial
 from .point_contact import PointContact, PointContactParams
 from .screw_samples import ScrewContactSamples, body_wrench, body_wrenches, thread_direction
 from .steady_state import steady_axial_speed
+from .contact_set import ContactSet
+from .robot_screws import RobotSource, ScrewLayout, screw_layout
+from .screw_drive import ScrewDrive, ScrewDriveParams
+from .screw_sdf import ScrewSdfContact, ScrewSdfContactParams
 
 __all__ = ["anisotropic_friction", "contact_forces", "ev_magnitude", "isotropic_friction", "normal_force",
            "slip_direction", "tangent_axis", "tangential_velocity", "contact_forces_nb", "contact_forces_numba",
            "body_wrenches_nb", "FrictionMaterial", "PointContact", "PointContactParams", "ScrewContactSamples", "body_wrench", "body_wrenches",
-           "thread_direction", "steady_axial_speed"]
+           "thread_direction", "steady_axial_speed", "ContactSet", "RobotSource", "ScrewLayout", "screw_layout",
+           "ScrewDrive", "ScrewDriveParams", "ScrewSdfContact", "ScrewSdfContactParams"]

@@ -1,0 +1,232 @@
+"""Screw–terrain contact, SDF back end: rings of samples on each screw against the terrain's SDF.
+
+Model (paper §2.2.2). Each screw's envelope cylinder (radius r, length L from the robot
+metadata) carries ``rings`` × ``per_ring`` samples (screw_samples.ScrewContactSamples),
+fixed in the screw's PARENT body, so they do not depend on the spin angle. A sample p
+with terrain signed distance φ(p) < 0 is a contact of depth d = −φ, outward normal n̂
+and the terrain material there. The envelope is a surface of revolution, so the contact
+acts where the envelope faces the terrain in the sample's ring (centre c_ring, axis â):
+ê_c = unit(−n̂ + (n̂·â)â), p_c = c_ring + r ê_c. There (sdf_kernels.contact_wrenches):
+
+    slip       v = v_B + ω_B × (p_c − o_B) + ω_s r â × ê_c      (world; ω_s the screw spin:
+               the screw DOF's rate, −rate for the mimic rear screw of a pair)
+    normal     F_n = max(0, k d − c v·n̂)                          (eq. 2, never pulls)
+    friction   F_t = −F_n μ (s + (‖e_v‖ − 1)(s·ê_v) ê_v)           (eq. 6)
+               s = v_t / sqrt(‖v_t‖² + v_ε²) (or linear, kernels.py), ‖e_v‖ = a + b F_n
+               clamped at ev_floor, ê_v = cos λ â − h sin λ (â × ê_c) normal to the thread
+
+and the force acts at p_c on the screw link: wrench [f, (p_c − o_S) × f] about the screw
+link's origin o_S (on the spin axis), so friction's axial torque loads the screw DOF and
+the normal force passes through the axis. Why p_c and not p: a robot on a plane rests
+on a face of each ring's polygon, between two samples; at the samples themselves the
+spin velocity ω_s â × (p − c) has a normal component ±ω_s r sin(π/per_ring) that the
+eq. 2 damper turns into a pumping normal force (tens of N at 2 rad/s), and the normal
+force would exert a spurious spin torque. The samples decide where and how deep the
+contact is; the slip, ê_v and lever arm are the envelope's. Body-to-body contact and
+contact on non-screw links are ignored (as in the paper).
+
+Broad phase (``broad_phase``): one bounding sphere per screw (centre c, radius
+sqrt(r² + (L/2)²) + margin) against ``terrain.distance_lower_bound``; only screws whose
+bound is ≤ 0 are sampled and queried, so a robot far from every surface costs one
+sphere query per screw.
+
+Material: the terrain's per-sample material (k, c, μ, ev_a, ev_b); any field of
+``material`` overrides it for every terrain material. v_ε, the regularisation mode and
+ev_floor are this component's.
+
+in   link_poses[nl,7]       multibody link_poses (xyz + quaternion xyzw, world)
+     link_velocities[nl,6]  multibody link_velocities ([v origin, ω], world)
+     joint_v[nj]            rad/s, multibody joint_v (screw spin rates)
+     terrain                structured Terrain (terrain component)
+out  wrenches[nl,6]         N, N·m: to multibody.wrenches ([f, τ] world, about each link origin)
+     normal_force[1]        N, Σ F_n over all samples
+     contacts[1]            number of samples in contact
+     screw_normal_force[ns] N, Σ F_n per screw (metadata order)
+     contact_set            ContactSet of the active contacts (computed once per step)
+all feedthrough from all inputs.
+
+Robot source: the multibody's parameters (design, modules, head, urdf, robot): see
+robot_screws.py for how the two share one description.
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+import numpy as np
+from pydantic import Field
+
+from snakesim.framework import Component, Input, Output, Params
+
+from ..terrain.analytic import PlaneTerrain
+from ..terrain.base import Terrain
+from .contact_set import ContactSet
+from .kernels import EV_FLOOR, MODES
+from .robot_screws import RobotSource, screw_layout
+from .screw_samples import ScrewContactSamples
+from .sdf_kernels import contact_wrenches, plane_active, plane_query, sample_points, screw_centres
+
+
+class MaterialOverride(Params):
+    """Replaces the terrain material's value where given (for every terrain material)."""
+
+    k: float | None = Field(None, gt=0, description="N/m, penalty stiffness (eq. 2)")
+    c: float | None = Field(None, ge=0, description="N·s/m, penalty damping (eq. 2)")
+    mu: float | None = Field(None, ge=0, description="friction coefficient")
+    ev_a: float | None = Field(None, description="‖e_v‖ at zero normal force")
+    ev_b: float | None = Field(None, description="1/N, d‖e_v‖/dF_n")
+
+
+class ScrewSdfContactParams(RobotSource):
+    rings: int = Field(3, ge=1, description="rings of samples per screw, spread over its length")
+    per_ring: int = Field(8, ge=1, description="samples per ring, evenly around the envelope")
+    phase: float = Field(0.0, description="rad, rotates every ring about its axis (φ = 3π/2 is the joint frame's −z)")
+    material: MaterialOverride | None = None
+    v_eps: float = Field(1e-3, ge=0, description="m/s, slip regularisation width")
+    regularisation: Literal["sqrt", "linear"] = "sqrt"
+    ev_floor: float = Field(EV_FLOOR, gt=0, description="smallest admissible ‖e_v‖")
+    broad_phase: bool = True
+    margin: float = Field(0.0, ge=0, description="m added to each screw's bounding sphere")
+
+
+def _lay(p):
+    return screw_layout(p)
+
+
+class ScrewSdfContact(Component[ScrewSdfContactParams]):
+    type_name = "screw_sdf_contact"
+    Params = ScrewSdfContactParams
+    #: query PlaneTerrain in numba (tests and the bench switch it off to compare)
+    fast_plane = True
+
+    link_poses = Input(shape=lambda p: (_lay(p).nl, 7), unit=None)
+    link_velocities = Input(shape=lambda p: (_lay(p).nl, 6), unit=None)
+    joint_v = Input(shape=lambda p: (_lay(p).nj,), unit="rad/s")
+    terrain = Input(type=Terrain)
+    wrenches = Output(shape=lambda p: (_lay(p).nl, 6), unit=None, feedthrough=True,
+                      names=lambda p: tuple(f"{ln}.{c}" for ln in _lay(p).links for c in ("fx", "fy", "fz", "tx", "ty", "tz")))
+    normal_force = Output(shape=(1,), unit="N", feedthrough=True)
+    contacts = Output(shape=(1,), unit="1", feedthrough=True)
+    screw_normal_force = Output(shape=lambda p: (_lay(p).ns,), unit="N", feedthrough=True,
+                                names=lambda p: _lay(p).names)
+    contact_set = Output(type=ContactSet, feedthrough=True, calc="calc_contact_set")
+
+    # -- set-up ------------------------------------------------------------------------------
+    def setup(self):
+        p = self.p
+        lay = self.layout = screw_layout(p)
+        samples = [ScrewContactSamples(lay.radius[s], lay.length[s], p.rings, p.per_ring, lay.lead_angle[s],
+                                       int(lay.hand[s]), lay.mount_R[s], lay.mount_p[s], p.phase)
+                   for s in range(lay.ns)]
+        self.samples = samples
+        self._points_B = np.ascontiguousarray(np.concatenate([s.points for s in samples]))
+        self._radial_B = np.ascontiguousarray(np.concatenate([s.radial for s in samples]))
+        self._ringc_B = np.ascontiguousarray(np.concatenate([s.points - s.radius * s.radial for s in samples]))
+        self._axis_B = np.ascontiguousarray(lay.mount_R[:, :, 0])
+        counts = np.array([len(s) for s in samples], dtype=np.int64)
+        self._start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+        self._sphere_r = np.sqrt(lay.radius ** 2 + (0.5 * lay.length) ** 2) + p.margin
+        n = self.n_samples = int(self._start[-1])
+        self._all = np.arange(lay.ns, dtype=np.int64)
+        self._active = np.zeros(lay.ns, dtype=np.int64)
+        self._plane = None
+        self._R = np.zeros((3, 3))
+        self._centres = np.zeros((lay.ns, 3))
+        self._pts, self._cpt, self._vel = np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3))
+        self._owner, self._sample = np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.int64)
+        self._force, self._fn = np.zeros((n, 3)), np.zeros(n)
+        self._dist, self._normal = np.zeros(n), np.zeros((n, 3))
+        self._mat = np.zeros(n, dtype=np.int64)
+        self._m = 0
+        self._mode = MODES[p.regularisation]
+        self._terrain, self._mats = None, None
+        self._seen_poses, self._seen_vel = np.full((lay.nl, 7), np.nan), np.full((lay.nl, 6), np.nan)
+        self._seen_jv, self._seen_terrain = np.full(lay.nj, np.nan), None
+        # counters (tests and benches read them): evaluations, screws and samples sent to the narrow phase
+        self.stats = {"evaluations": 0, "screws_tested": 0, "samples_queried": 0}
+
+    def _material_table(self, terrain: Terrain) -> np.ndarray:
+        if terrain is not self._terrain:
+            o = self.p.material
+            rows = []
+            for m in terrain.materials:
+                row = [m.k, m.c, m.mu, m.ev_a, m.ev_b]
+                if o is not None:
+                    row = [v if ov is None else ov for v, ov in zip(row, (o.k, o.c, o.mu, o.ev_a, o.ev_b))]
+                rows.append(row)
+            self._terrain, self._mats = terrain, np.array(rows, dtype=np.float64)
+            # planes are queried in numba (no allocation); every other kind through Terrain.query
+            self._plane = None
+            if type(terrain) is PlaneTerrain and self.fast_plane:
+                self._plane = (np.array(terrain.origin, dtype=float), np.array(terrain.n, dtype=float),
+                               int(terrain.region_material[0]))
+        return self._mats
+
+    # -- hot path --------------------------------------------------------------------------------
+    def output(self, t, x, u, y):
+        terrain = u.terrain
+        if terrain is None:
+            raise ValueError(f"{self.name}: input 'terrain' carries no Terrain; connect a terrain component's "
+                             "'terrain' output to it")
+        mats = self._material_table(terrain)
+        lay = self.layout
+        poses = u.link_poses
+        plane = self._plane
+        if self.p.broad_phase:
+            screw_centres(poses, lay.parent_row, lay.mount_p, self._R, self._centres)
+            if plane is not None:
+                active = self._active[:plane_active(self._centres, self._sphere_r, plane[0], plane[1], self._active)]
+            else:
+                active = np.flatnonzero(terrain.distance_lower_bound(self._centres, self._sphere_r) <= 0.0)
+        else:
+            active = self._all
+        m = 0
+        if active.size:
+            m = sample_points(poses, active, active.size, self._start, self._points_B, lay.parent_row, self._R,
+                              self._pts, self._sample, self._owner)
+        st = self.stats
+        st["evaluations"] += 1
+        st["screws_tested"] += int(active.size)
+        st["samples_queried"] += m
+        self._m = m
+        if m and plane is not None:
+            plane_query(m, self._pts, plane[0], plane[1], self._dist, self._normal, self._mat)
+            self._mat[:m] = plane[2]
+        elif m:
+            q = terrain.query(self._pts[:m])
+            self._dist[:m] = q.distance
+            self._normal[:m] = q.normal
+            self._mat[:m] = q.material
+        n_contact = contact_wrenches(m, self._dist, self._normal, self._mat, self._sample, self._owner, poses,
+                                     u.link_velocities, u.joint_v, self._ringc_B, self._radial_B, self._axis_B,
+                                     lay.parent_row, lay.screw_row, lay.radius, lay.lead_angle, lay.hand, lay.spin_dof,
+                                     lay.spin_mult, mats, self.p.v_eps, self._mode, self.p.ev_floor, self._R,
+                                     self._cpt, self._vel, self._force, self._fn, y.wrenches, y.screw_normal_force)
+        y.contacts[0] = n_contact
+        y.normal_force[0] = y.screw_normal_force.sum()
+        # what this evaluation saw, so contact_set can tell whether it describes its inputs
+        np.copyto(self._seen_poses, poses)
+        np.copyto(self._seen_vel, u.link_velocities)
+        np.copyto(self._seen_jv, u.joint_v)
+        self._seen_terrain = terrain
+
+    def calc_contact_set(self, t, x, u, y):
+        if not (u.terrain is self._seen_terrain and np.array_equal(u.link_poses, self._seen_poses)
+                and np.array_equal(u.link_velocities, self._seen_vel) and np.array_equal(u.joint_v, self._seen_jv)):
+            self.output(t, x, u, _Scratch(self.layout))     # the last evaluation was at other inputs
+        m = self._m
+        on = np.flatnonzero(self._dist[:m] < 0.0)
+        y.contact_set = ContactSet(
+            t=float(t), points=self._cpt[on].copy(), normals=self._normal[on].copy(), forces=self._force[on].copy(),
+            normal_force=self._fn[on].copy(), depth=-self._dist[on], slip=self._vel[on].copy(),
+            link=self.layout.screw_row[self._owner[on]], material=self._mat[on].copy(),
+            link_names=self.layout.links)
+
+
+class _Scratch:
+    """Output buffers for an evaluation whose numeric results nobody reads."""
+
+    def __init__(self, lay):
+        self.wrenches = np.zeros((lay.nl, 6))
+        self.normal_force, self.contacts = np.zeros(1), np.zeros(1)
+        self.screw_normal_force = np.zeros(lay.ns)

@@ -1,0 +1,197 @@
+"""numba kernels of the screw–SDF contact step (screw_sdf.py): broad-phase spheres, sample
+kinematics, and forces reduced to link wrenches. All write into preallocated arrays.
+
+Frames: link_poses rows are [x, y, z, qx, qy, qz, qw] (world), link_velocities rows
+[v of the link origin, ω] (world axes), as the multibody outputs them. Sample
+quantities in the body frame B (the screw's parent link): points_B, ringc_B (centre of
+the sample's ring, on the axis), radial_B; per screw axis_B and mount_p (screw centre).
+
+Material table ``mats`` (nm, 5): columns k N/m, c N·s/m, μ, ev_a, ev_b 1/N; row = the
+terrain's material index of the sample.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+K, C, MU, EV_A, EV_B = range(5)
+
+
+@njit(cache=True, inline="always")
+def _rot(poses, b, R):
+    x, y, z, w = poses[b, 3], poses[b, 4], poses[b, 5], poses[b, 6]
+    R[0, 0] = 1 - 2 * (y * y + z * z)
+    R[0, 1] = 2 * (x * y - z * w)
+    R[0, 2] = 2 * (x * z + y * w)
+    R[1, 0] = 2 * (x * y + z * w)
+    R[1, 1] = 1 - 2 * (x * x + z * z)
+    R[1, 2] = 2 * (y * z - x * w)
+    R[2, 0] = 2 * (x * z - y * w)
+    R[2, 1] = 2 * (y * z + x * w)
+    R[2, 2] = 1 - 2 * (x * x + y * y)
+
+
+@njit(cache=True)
+def screw_centres(poses, parent_row, mount_p, R, out_centres):
+    """World centre of every screw: o_B + R_B mount_p. R is (3,3) scratch."""
+    for s in range(parent_row.shape[0]):
+        b = parent_row[s]
+        _rot(poses, b, R)
+        for i in range(3):
+            out_centres[s, i] = poses[b, i] + R[i, 0] * mount_p[s, 0] + R[i, 1] * mount_p[s, 1] \
+                + R[i, 2] * mount_p[s, 2]
+
+
+@njit(cache=True)
+def sample_points(poses, active, n_active, start, points_B, parent_row, R, out_points, out_sample, out_owner):
+    """World position of every sample of the active screws, written compactly to rows 0..m-1
+    (out_sample = row in points_B, out_owner = screw index); returns m."""
+    m = 0
+    for a in range(n_active):
+        s = active[a]
+        b = parent_row[s]
+        _rot(poses, b, R)
+        for i in range(start[s], start[s + 1]):
+            for j in range(3):
+                out_points[m, j] = poses[b, j] + R[j, 0] * points_B[i, 0] + R[j, 1] * points_B[i, 1] \
+                    + R[j, 2] * points_B[i, 2]
+            out_sample[m] = i
+            out_owner[m] = s
+            m += 1
+    return m
+
+
+@njit(cache=True)
+def contact_wrenches(m, distance, normal, material, sample, owner, poses, vels, joint_v, ringc_B, radial_B, axis_B,
+                     parent_row, screw_row, radius, lead_angle, hand, spin_dof, spin_mult, mats, v_eps, mode,
+                     ev_floor, R, out_point, out_vel, out_force, out_fn, out_wrench, out_screw_fn):
+    """Forces on the first m samples and their wrenches about each screw link's origin o_S.
+
+    A sample in contact (φ < 0) gives the depth d = −φ and the terrain normal n̂. The
+    screw's envelope is a surface of revolution, so the force acts where the envelope
+    faces the terrain in the sample's ring: ê_c = unit(−n̂ + (n̂·â)â) (the sample's own
+    radial if n̂ ∥ â), p_c = c_ring + r ê_c. There
+
+        v    = v_B + ω_B × (p_c − o_B) + ω_s r â × ê_c        (spin slides along the surface:
+                                                              no normal component, magnitude ω_s r)
+        ê_v  = cos λ â − h sin λ (â × ê_c)                   (normal to the thread line)
+        F_n  = max(0, k d − c v·n̂);  F_t by eq. 6 (kernels.py)
+
+    so the sampling sets only where and how deep the contact is, never a spurious
+    normal velocity or spin torque from a sample that lies off the envelope's lowest line.
+    Wrench [f, (p_c − o_S) × f] into out_wrench[screw_row[s]] (zeroed first). Writes
+    out_point (p_c), out_vel, out_force, out_fn for samples in contact (zeros elsewhere).
+    Returns the number of samples in contact.
+    """
+    out_wrench[:, :] = 0.0
+    out_screw_fn[:] = 0.0
+    n_contact = 0
+    for i in range(m):
+        d = -distance[i]
+        if not d > 0.0:
+            out_fn[i] = 0.0
+            for j in range(3):
+                out_force[i, j] = 0.0
+                out_vel[i, j] = 0.0
+                out_point[i, j] = 0.0
+            continue
+        n_contact += 1
+        s = owner[i]
+        q = sample[i]
+        b = parent_row[s]
+        _rot(poses, b, R)
+        nx, ny, nz = normal[i, 0], normal[i, 1], normal[i, 2]
+        ax = R[0, 0] * axis_B[s, 0] + R[0, 1] * axis_B[s, 1] + R[0, 2] * axis_B[s, 2]
+        ay = R[1, 0] * axis_B[s, 0] + R[1, 1] * axis_B[s, 1] + R[1, 2] * axis_B[s, 2]
+        az = R[2, 0] * axis_B[s, 0] + R[2, 1] * axis_B[s, 1] + R[2, 2] * axis_B[s, 2]
+        na = nx * ax + ny * ay + nz * az
+        ux, uy, uz = -(nx - na * ax), -(ny - na * ay), -(nz - na * az)
+        un = math.sqrt(ux * ux + uy * uy + uz * uz)
+        if un > 1e-9:
+            ux, uy, uz = ux / un, uy / un, uz / un
+        else:                                           # terrain normal along the axis: a screw end
+            ux = R[0, 0] * radial_B[q, 0] + R[0, 1] * radial_B[q, 1] + R[0, 2] * radial_B[q, 2]
+            uy = R[1, 0] * radial_B[q, 0] + R[1, 1] * radial_B[q, 1] + R[1, 2] * radial_B[q, 2]
+            uz = R[2, 0] * radial_B[q, 0] + R[2, 1] * radial_B[q, 1] + R[2, 2] * radial_B[q, 2]
+        r = radius[s]
+        # contact point p_c, relative to the body origin
+        rx = R[0, 0] * ringc_B[q, 0] + R[0, 1] * ringc_B[q, 1] + R[0, 2] * ringc_B[q, 2] + r * ux
+        ry = R[1, 0] * ringc_B[q, 0] + R[1, 1] * ringc_B[q, 1] + R[1, 2] * ringc_B[q, 2] + r * uy
+        rz = R[2, 0] * ringc_B[q, 0] + R[2, 1] * ringc_B[q, 1] + R[2, 2] * ringc_B[q, 2] + r * uz
+        px, py, pz = poses[b, 0] + rx, poses[b, 1] + ry, poses[b, 2] + rz
+        # â × ê_c: the circumferential direction at p_c
+        cx, cy, cz = ay * uz - az * uy, az * ux - ax * uz, ax * uy - ay * ux
+        wr = spin_mult[s] * joint_v[spin_dof[s]] * r
+        wx, wy, wz = vels[b, 3], vels[b, 4], vels[b, 5]
+        vx = vels[b, 0] + (wy * rz - wz * ry) + wr * cx
+        vy = vels[b, 1] + (wz * rx - wx * rz) + wr * cy
+        vz = vels[b, 2] + (wx * ry - wy * rx) + wr * cz
+        out_point[i, 0], out_point[i, 1], out_point[i, 2] = px, py, pz
+        out_vel[i, 0], out_vel[i, 1], out_vel[i, 2] = vx, vy, vz
+        mat = material[i]
+        vn = vx * nx + vy * ny + vz * nz
+        fn = mats[mat, K] * d - mats[mat, C] * vn
+        if fn < 0.0:
+            fn = 0.0                                   # never pulls
+        out_fn[i] = fn
+        tx, ty, tz = vx - vn * nx, vy - vn * ny, vz - vn * nz
+        speed = math.sqrt(tx * tx + ty * ty + tz * tz)
+        if mode == 0:
+            den = math.sqrt(speed * speed + v_eps * v_eps)
+        else:
+            den = speed if speed > v_eps else v_eps
+        g = 1.0 / den if den > 0.0 else 0.0
+        sx, sy, sz = tx * g, ty * g, tz * g
+        cl, sl = math.cos(lead_angle[s]), hand[s] * math.sin(lead_angle[s])
+        ex, ey, ez = cl * ax - sl * cx, cl * ay - sl * cy, cl * az - sl * cz
+        en = ex * nx + ey * ny + ez * nz
+        ex, ey, ez = ex - en * nx, ey - en * ny, ez - en * nz
+        enorm = math.sqrt(ex * ex + ey * ey + ez * ez)
+        if enorm > 1e-12:
+            ex, ey, ez = ex / enorm, ey / enorm, ez / enorm
+        else:
+            ex, ey, ez = 0.0, 0.0, 0.0
+        k = mats[mat, EV_A] + mats[mat, EV_B] * fn
+        if k < ev_floor:
+            k = ev_floor
+        cc = (k - 1.0) * (sx * ex + sy * ey + sz * ez)
+        mf = -mats[mat, MU] * fn
+        fx = fn * nx + mf * (sx + cc * ex)
+        fy = fn * ny + mf * (sy + cc * ey)
+        fz = fn * nz + mf * (sz + cc * ez)
+        out_force[i, 0], out_force[i, 1], out_force[i, 2] = fx, fy, fz
+        out_screw_fn[s] += fn
+        o = screw_row[s]
+        rx, ry, rz = px - poses[o, 0], py - poses[o, 1], pz - poses[o, 2]
+        out_wrench[o, 0] += fx
+        out_wrench[o, 1] += fy
+        out_wrench[o, 2] += fz
+        out_wrench[o, 3] += ry * fz - rz * fy
+        out_wrench[o, 4] += rz * fx - rx * fz
+        out_wrench[o, 5] += rx * fy - ry * fx
+    return n_contact
+
+
+@njit(cache=True)
+def plane_query(m, points, origin, n, out_distance, out_normal, out_material):
+    """PlaneTerrain.query without allocation: φ = (p − o)·n̂, normal n̂, material region 0 (row given)."""
+    for i in range(m):
+        out_distance[i] = (points[i, 0] - origin[0]) * n[0] + (points[i, 1] - origin[1]) * n[1] \
+            + (points[i, 2] - origin[2]) * n[2]
+        out_normal[i, 0], out_normal[i, 1], out_normal[i, 2] = n[0], n[1], n[2]
+        out_material[i] = 0
+
+
+@njit(cache=True)
+def plane_active(centres, radii, origin, n, out_active):
+    """Broad phase against a plane (exact distance, Lipschitz 1): screws whose sphere reaches it."""
+    k = 0
+    for s in range(centres.shape[0]):
+        d = (centres[s, 0] - origin[0]) * n[0] + (centres[s, 1] - origin[1]) * n[1] + (centres[s, 2] - origin[2]) * n[2]
+        if d - radii[s] <= 0.0:
+            out_active[k] = s
+            k += 1
+    return k
