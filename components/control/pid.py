@@ -1,0 +1,215 @@
+"""PID joint controllers for every DOF joint of a robot, in one vectorised component (paper 2.2.5).
+
+Like the hardware's joint controllers: each joint runs in position or
+velocity mode (or off), with its own gains, a torque limit, anti-windup and a
+first-order-filtered derivative. Per joint i (all vector operations)::
+
+    position mode:  e = setpoint − q        (wrapped to (−π, π] on continuous joints)
+                    r = rate_ref − v        the error rate, from the measured joint rate
+                    d = r filtered by 1/(tf·s + 1)
+    velocity mode:  e = setpoint − v
+                    d = s/(tf·s + 1) · e    filtered derivative of the error
+    u   = kp·e + ki·I + kd·d + tau_ff       I = ∫ e dt
+    tau = clip(u, −tau_max, tau_max)
+
+Anti-windup is **clamping** (conditional integration): I stops integrating
+while the output is saturated and the error drives it further into the
+limit (e·u > 0); ``anti_windup: none`` integrates always.
+
+Two forms, chosen by the assembly:
+- no ``rate``: continuous time, state [I, z] (nj each), z the filter state
+  (ż = (r − z)/tf in position mode, ż = (e − z)/tf in velocity mode).
+- ``rate`` (Hz): discrete, hardware-like; sample period T = 1/rate, outputs
+  computed at each tick and held (zero-order hold), backward-Euler filter
+  a = T/(tf + T)::
+      position: d_k = (1 − a)·z_k + a·r_k,         z_{k+1} = d_k
+      velocity: d_k = (e_k − z_k)/(tf + T),       z_{k+1} = z_k + T·d_k
+                (tf = 0: the backward difference (e_k − e_{k−1})/T)
+      I_{k+1} = I_k + T·e_k   (unless clamped)
+  The first tick starts the filter at its input (no derivative kick).
+
+Gains: ``gains`` by joint name or glob pattern, each field falling back to
+``kind_gains`` for the joint's kind (bend, twist, screw, other), then to the
+built-in defaults :data:`DEFAULT_GAINS` (bend/twist position, screws
+velocity). tau_max falls back to the URDF effort limit (``torque_limit:
+urdf``) or to none.
+
+in   setpoint[nj]  rad (position joints) or rad/s (velocity joints), DOF joints in URDF order
+     rate_ref[nj]  rad/s, rate reference of position joints (default 0)
+     tau_ff[nj]    N·m feedforward, added before saturation (default 0)
+     q[nj] rad, v[nj] rad/s   from multibody.joint_q / joint_v
+out  tau[nj]   N·m    (feedthrough from all inputs)
+     error[nj] rad or rad/s, e above
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field
+
+from snakesim.framework import Component, ContinuousState, Input, Output
+
+from .robot_source import (JOINT_KINDS, RobotParams, continuous_mask, effort_limits, joint_kind, joint_names,
+                           per_joint, wrap_angle)
+
+Mode = Literal["position", "velocity", "off"]
+
+#: Built-in gains per joint kind. Bend/twist actuators hold angles; screws run at commanded speeds.
+DEFAULT_GAINS = {
+    "bend": {"mode": "position", "kp": 200.0, "ki": 0.0, "kd": 20.0, "tf": 0.005},
+    "twist": {"mode": "position", "kp": 100.0, "ki": 0.0, "kd": 10.0, "tf": 0.005},
+    "screw": {"mode": "velocity", "kp": 5.0, "ki": 20.0, "kd": 0.0, "tf": 0.0},
+    "other": {"mode": "position", "kp": 10.0, "ki": 0.0, "kd": 1.0, "tf": 0.0},
+}
+
+
+class JointGains(BaseModel):
+    """Gains of one joint (or a pattern of joints); unset fields fall back (see module docstring)."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+    mode: Mode | None = None
+    kp: float | None = Field(None, ge=0, description="N·m/rad (position) or N·m·s/rad (velocity)")
+    ki: float | None = Field(None, ge=0, description="N·m/(rad·s) or N·m/rad")
+    kd: float | None = Field(None, ge=0, description="N·m·s/rad or N·m·s²/rad")
+    tf: float | None = Field(None, ge=0, description="derivative filter time constant, s (0: unfiltered)")
+    tau_max: float | None = Field(None, gt=0, description="N·m, symmetric torque limit")
+
+
+class JointPidParams(RobotParams):
+    gains: dict[str, JointGains] = Field(default_factory=dict, description="by joint name or glob pattern")
+    kind_gains: dict[str, JointGains] = Field(default_factory=dict,
+                                              description="per joint kind (bend, twist, screw, other)")
+    torque_limit: Literal["urdf", "none"] = Field("urdf", description="default tau_max: URDF effort or none")
+    anti_windup: Literal["clamp", "none"] = "clamp"
+
+
+def _nj(p):
+    return (len(joint_names(p)),)
+
+
+class JointPid(Component[JointPidParams]):
+    type_name = "joint_pid"
+    Params = JointPidParams
+
+    setpoint = Input(shape=_nj, unit=None, names=joint_names)
+    rate_ref = Input(shape=_nj, unit="rad/s", default=0.0)
+    tau_ff = Input(shape=_nj, unit="N*m", default=0.0)
+    q = Input(shape=_nj, unit="rad")
+    v = Input(shape=_nj, unit="rad/s")
+    tau = Output(shape=_nj, unit="N*m", feedthrough=True, names=joint_names)
+    error = Output(shape=_nj, unit=None, feedthrough=True, names=joint_names)
+
+    # -- set-up: one array per gain ---------------------------------------------------
+    def setup(self):
+        p = self.p
+        names = list(joint_names(p))
+        self.joint_names = names
+        bad = set(p.kind_gains) - set(JOINT_KINDS)
+        if bad:
+            raise ValueError(f"{self.name}: kind_gains: unknown joint kind(s) {sorted(bad)}; kinds: {', '.join(JOINT_KINDS)}")
+        explicit = per_joint(names, p.gains, f"{self.name}: gains")
+        effort = effort_limits(p) if p.torque_limit == "urdf" else np.full(len(names), np.inf)
+        rows = []
+        for i, n in enumerate(names):
+            kind = joint_kind(n)
+            g = dict(DEFAULT_GAINS[kind], tau_max=float(effort[i]))
+            for layer in (p.kind_gains.get(kind), explicit[i]):
+                if layer is not None:
+                    g.update(layer.model_dump(exclude_none=True))
+            rows.append(g)
+        self.gains_table = rows
+        col = lambda k: np.array([r[k] for r in rows], dtype=float)  # noqa: E731
+        self._pos = np.array([r["mode"] == "position" for r in rows])
+        self._vel = np.array([r["mode"] == "velocity" for r in rows])
+        on = self._pos | self._vel
+        self._kp, self._ki, self._kd = col("kp") * on, col("ki") * on, col("kd") * on
+        self._tf, self._tmax = col("tf"), col("tau_max")
+        self._cont = continuous_mask(p) & self._pos
+        self._clamp = p.anti_windup == "clamp"
+        self._nj = len(names)
+        self._discrete = self.rate is not None
+        if self._discrete:
+            T = self._T = 1.0 / self.rate
+            self._a = T / (self._tf + T)
+        else:
+            bad = [n for n, v, kd, tf in zip(names, self._vel, self._kd, self._tf) if v and kd > 0 and tf == 0]
+            if bad:
+                raise ValueError(f"{self.name}: velocity-mode joints {bad} have kd > 0 and tf = 0: the continuous "
+                                 "form needs a filter time constant tf > 0 to differentiate the rate error "
+                                 "(or give the component a rate for the discrete form)")
+            self._inv_tf = np.where(self._tf > 0, 1.0 / np.where(self._tf > 0, self._tf, 1.0), 0.0)
+
+    def continuous_state(self):
+        if self._discrete:
+            return None
+        n = self._nj
+        return ContinuousState(np.zeros(2 * n), names=tuple(f"{j}.{s}" for s in ("integral", "filter")
+                                                           for j in self.joint_names))
+
+    def discrete_state(self):
+        if not self._discrete:
+            return None
+        return np.zeros(2 * self._nj + 1)       # [I, z, started]
+
+    # -- the law --------------------------------------------------------------------------
+    def _errors(self, u):
+        pos = self._pos
+        e = np.where(pos, u.setpoint - u.q, u.setpoint - u.v)
+        if self._cont.any():
+            e = np.where(self._cont, wrap_angle(e), e)
+        r = u.rate_ref - u.v
+        return e, r
+
+    def _derivative_term(self, x, e, r):
+        n = self._nj
+        z = x[n:2 * n]
+        if self._discrete:
+            if x[2 * n] == 0.0:                   # first tick: the filter starts at its input
+                z = np.where(self._pos, r, e)
+            d_pos = (1.0 - self._a) * z + self._a * r
+            d_vel = (e - z) / (self._tf + self._T)
+        else:
+            d_pos = np.where(self._tf > 0, z, r)
+            d_vel = (e - z) * self._inv_tf
+        return np.where(self._pos, d_pos, d_vel), z
+
+    def _law(self, x, u):
+        e, r = self._errors(u)
+        d, z = self._derivative_term(x, e, r)
+        raw = self._kp * e + self._ki * x[:self._nj] + self._kd * d + u.tau_ff
+        tau = np.clip(raw, -self._tmax, self._tmax)
+        return tau, raw, e, r, d, z
+
+    def _integrating(self, raw, tau, e):
+        if not self._clamp:
+            return np.ones_like(e, dtype=bool)
+        return ~((raw != tau) & (e * raw > 0))
+
+    def output(self, t, x, u, y):
+        tau, _, e, _, _, _ = self._law(x, u)
+        y.tau[:] = tau
+        y.error[:] = e
+
+    def derivative(self, t, x, u, dx):
+        n = self._nj
+        tau, raw, e, r, _, z = self._law(x, u)
+        dx[:n] = np.where(self._integrating(raw, tau, e), e, 0.0)
+        dx[n:] = np.where(self._pos, r - z, e - z) * self._inv_tf
+
+    def update(self, t, xd, u):
+        n = self._nj
+        tau, raw, e, r, d, z = self._law(xd, u)
+        xd[:n] += self._T * np.where(self._integrating(raw, tau, e), e, 0.0)
+        xd[n:2 * n] = np.where(self._pos, d, z + self._T * d)
+        xd[2 * n] = 1.0
+
+    # -- introspection ------------------------------------------------------------------------
+    def gains_of(self, joint: str) -> dict:
+        """The resolved gains of one joint (mode, kp, ki, kd, tf, tau_max)."""
+        try:
+            return dict(self.gains_table[self.joint_names.index(joint)])
+        except ValueError:
+            raise KeyError(f"{self.name}: no DOF joint '{joint}'; joints: {', '.join(self.joint_names)}") from None
+

@@ -1,0 +1,80 @@
+"""Where things live in a snakesim rerun recording, and which of them are physical.
+
+Entity layout (one recording per run; timeline ``sim`` is simulated time, a
+duration in seconds from the run's t0)::
+
+    world/physical/terrain                     Mesh3D, static         the terrain surface
+    world/physical/<robot>/<link>              Transform3D per frame  link pose (world)
+    world/physical/<robot>/<link>/visual       Mesh3D, static         URDF visual geometry, link frame
+    world/physical/tethers                     LineStrips3D           tether polylines (when present)
+    world/debug/contacts/points                Points3D               active contact points
+    world/debug/contacts/normal_forces         Arrows3D               F_n n, scaled (m per N); the whole
+                                                                      force when the contact value has no normals
+    world/debug/contacts/friction_forces       Arrows3D               F - F_n n, scaled
+    world/debug/frames/<link>                  Transform3D + Arrows3D body frame axes (on request)
+    plots/<component>/<port>                   Scalars                a recorded signal, one series per element
+    plots/sim/real_time_factor                 Scalars                simulated s per wall-clock s
+
+Physical vs ornamental (paper 2.2.3). Everything under ``world/physical``
+is an object a sensor could see: terrain, robot bodies, tethers. Everything
+under ``world/debug`` is ornamental: arrows, frames, labels and markers that
+explain the simulation. The viewer shows both; a sensor never sees debug
+geometry. Contract for perception sensors (cameras, lidar; none exist yet):
+a sensor builds its scene from the physical objects only -- the same
+terrain, link meshes and tethers this package logs under ``world/physical``
+(use :func:`is_physical` when a sensor or exporter walks entity paths) --
+and must never ray-cast against, render or return anything under
+``world/debug``. New ornamental geometry goes under ``world/debug``; new
+geometry with mass or optical presence goes under ``world/physical``.
+"""
+
+from __future__ import annotations
+
+import re
+
+WORLD = "world"
+PHYSICAL = f"{WORLD}/physical"
+DEBUG = f"{WORLD}/debug"
+PLOTS = "plots"
+TIMELINE = "sim"
+
+TERRAIN = f"{PHYSICAL}/terrain"
+TETHERS = f"{PHYSICAL}/tethers"
+CONTACT_POINTS = f"{DEBUG}/contacts/points"
+CONTACT_NORMAL = f"{DEBUG}/contacts/normal_forces"
+CONTACT_FRICTION = f"{DEBUG}/contacts/friction_forces"
+FRAMES = f"{DEBUG}/frames"
+REAL_TIME_FACTOR = f"{PLOTS}/sim/real_time_factor"
+
+_UNSAFE = re.compile(r"[^A-Za-z0-9_\-/]")
+
+
+def part(name: str) -> str:
+    """A name as entity-path text: characters rerun treats specially become '_'
+    ('/' is kept: component names of included assemblies nest)."""
+    return _UNSAFE.sub("_", name).strip("/") or "_"
+
+
+def robot_root(component: str) -> str:
+    return f"{PHYSICAL}/{part(component)}"
+
+
+def link_path(component: str, link: str) -> str:
+    return f"{robot_root(component)}/{part(link).replace('/', '_')}"
+
+
+def frame_path(link: str) -> str:
+    return f"{FRAMES}/{part(link).replace('/', '_')}"
+
+
+def series_path(signal: str) -> str:
+    """'robot.joint_q' -> 'plots/robot/joint_q' (a component name may contain '/')."""
+    comp, _, port = signal.rpartition(".")
+    return f"{PLOTS}/{part(comp)}/{part(port)}"
+
+
+def is_physical(entity_path: str) -> bool:
+    """True for what a sensor may see (``world/physical/...``), False for
+    ornamental geometry (``world/debug/...``), plots and anything else."""
+    p = entity_path.lstrip("/")
+    return p == PHYSICAL or p.startswith(PHYSICAL + "/")

@@ -1,0 +1,201 @@
+"""``snakesim replay RUN_DIR``: a finished ``--out`` folder as a rerun recording, without re-simulating.
+
+Reads ``config.yaml`` (the resolved configuration) and ``signals.csv``:
+
+- robot geometry: rebuilt from the robot component's source keys (the
+  component with a ``link_poses`` output), exactly as the live sink does;
+- link poses, in order of preference: the recorded ``<robot>.link_poses``
+  columns; forward kinematics of recorded ``<robot>.q`` through the robot
+  component itself; otherwise the initial pose only (with a note);
+- terrain: the component with a Terrain output, built from its params;
+- one plot per recorded signal, every row of every column; the real-time
+  factor is the run's average from ``summary.json``.
+
+The entities are those of a live ``--viz`` recording (:mod:`.entities`);
+contacts and tethers are not in signals.csv (structured signals are not
+recorded), so a replay has none.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from snakesim.framework import SnakesimError
+from snakesim.framework.harness import Harness
+from snakesim.framework.signals import Structured
+
+from . import entities as E
+from .robot_geometry import RobotSource, link_meshes
+from .sink import RerunSinkParams, link_names
+from .target import VizTarget, open_recording
+
+POSE_FIELDS = ("x", "y", "z", "qx", "qy", "qz", "qw")
+
+
+@dataclasses.dataclass
+class ReplayReport:
+    target: VizTarget
+    frames: int
+    series: list[str]
+    notes: list[str]
+
+
+def read_signals(path: Path) -> tuple[list[str], np.ndarray]:
+    with open(path) as fh:
+        header = fh.readline().strip()
+    columns = header.split(",")
+    if not columns or columns[0] != "t":
+        raise SnakesimError(f"{path}: first line must be the column header starting with 't', got '{header[:60]}'")
+    data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    if data.shape[0] == 0:
+        raise SnakesimError(f"{path}: no rows to replay")
+    if data.shape[1] != len(columns):
+        raise SnakesimError(f"{path}: {data.shape[1]} values per row but {len(columns)} column names")
+    return columns, data
+
+
+def signal_columns(columns: list[str], ref: str) -> tuple[list[int], list[str]]:
+    """Column indices of recorded signal ``ref`` ('comp.port') and their element names."""
+    idx, names = [], []
+    for i, c in enumerate(columns):
+        if c == ref:
+            idx.append(i)
+            names.append(ref.rpartition(".")[2])
+        elif c.startswith(ref + ".") or c.startswith(ref + "["):
+            idx.append(i)
+            names.append(c[len(ref) + (1 if c[len(ref)] == "." else 0):])
+    return idx, names
+
+
+def load_run(run_dir: Path) -> tuple[dict, list[str], np.ndarray, dict]:
+    run_dir = Path(run_dir)
+    if not run_dir.is_dir():
+        raise SnakesimError(f"'{run_dir}' is not a folder; replay reads what `snakesim run --out DIR` writes")
+    need = [run_dir / "config.yaml", run_dir / "signals.csv"]
+    missing = [p.name for p in need if not p.is_file()]
+    if missing:
+        raise SnakesimError(f"{run_dir}: no {' or '.join(missing)}; replay reads what `snakesim run --out DIR` "
+                            "writes (signals.csv, summary.json, config.yaml)")
+    try:
+        cfg = yaml.safe_load(need[0].read_text())
+    except yaml.YAMLError as e:
+        raise SnakesimError(f"{need[0]}: not YAML ({e})") from None
+    if not isinstance(cfg, dict) or not isinstance(cfg.get("components"), dict):
+        raise SnakesimError(f"{need[0]}: no 'components' mapping; is this a snakesim config.yaml?")
+    columns, data = read_signals(need[1])
+    summary_path = run_dir / "summary.json"
+    summary = json.loads(summary_path.read_text()) if summary_path.is_file() else {}
+    return cfg, columns, data, summary
+
+
+def replay(run_dir, target: VizTarget | None = None, body_frames: bool = False, registry=None) -> ReplayReport:
+    from snakesim.components.terrain import Terrain
+    from snakesim.framework.registry import default_registry
+
+    from .blueprint import default_blueprint
+    from .scene_log import SceneLog
+    from .terrain_geometry import terrain_mesh
+
+    run_dir = Path(run_dir)
+    cfg, columns, data, summary = load_run(run_dir)
+    registry = registry or default_registry()
+    target = target or VizTarget("save", str(run_dir / "replay.rrd"))
+    t = data[:, 0]
+    notes: list[str] = []
+
+    classes = {}
+    for name, spec in cfg["components"].items():
+        try:
+            classes[name] = registry.component(spec["type"])
+        except Exception:
+            notes.append(f"component '{name}': type '{spec.get('type')}' is not registered here; skipped")
+    viz = next((spec.get("params", {}) for n, spec in cfg["components"].items()
+                if spec.get("type") == "rerun_viewer"), {})
+    vp = RerunSinkParams(**{k: v for k, v in viz.items() if k in ("terrain_extent", "terrain_cell", "terrain_center",
+                                                                 "terrain_cutaway", "frame_length", "force_scale")})
+    records = [r for r in cfg.get("record", []) if isinstance(r, str)]
+
+    # robot ---------------------------------------------------------------------------
+    robot = next((n for n, c in classes.items() if "link_poses" in c.outputs), None)
+    links, meshes, poses, pose_t = (), [], None, t
+    if robot is not None:
+        params = cfg["components"][robot].get("params", {})
+        links = link_names(params)
+        meshes = link_meshes(RobotSource.of(params))
+        poses, pose_t, note = _robot_poses(robot, classes[robot], params, columns, data, records, links)
+        if note:
+            notes.append(note)
+
+    # terrain -------------------------------------------------------------------------
+    tmesh = None
+    for name, cls in classes.items():
+        port = next((p for p, o in cls.outputs.items() if isinstance(o.signal, Structured)
+                     and isinstance(o.signal.cls, type) and issubclass(o.signal.cls, Terrain)), None)
+        if port is not None:
+            terrain = Harness(cls(name, cfg["components"][name].get("params", {}))).outputs()[port]
+            center = (np.asarray(vp.terrain_center) if vp.terrain_center is not None
+                      else poses[0, :, :3].mean(axis=0) if poses is not None and poses.shape[1] else np.zeros(3))
+            tmesh = terrain_mesh(terrain, center, vp.terrain_extent, vp.terrain_cell, vp.terrain_cutaway)
+            break
+
+    # series --------------------------------------------------------------------------
+    series = []
+    for ref in records:
+        idx, names = signal_columns(columns, ref)
+        if idx:
+            series.append((ref, names, idx))
+
+    first = poses[0, :, :3] if poses is not None and poses.shape[1] else np.zeros((1, 3))
+    bp = default_blueprint(first, [E.series_path(s) for s, _, _ in series])
+    rec, used = open_recording(target, "snakesim", blueprint=bp)
+    log = SceneLog(rec, robot=robot, link_names=links, meshes=meshes,
+                   series=[(s, names, len(idx)) for s, names, idx in series],
+                   body_frames=body_frames, frame_length=vp.frame_length, force_scale=vp.force_scale)
+    log.log_static(tmesh)
+    if poses is not None:
+        log.send_poses(pose_t, poses)
+    for s, _, idx in series:
+        log.send_series(s, t, data[:, idx])
+    rtf = summary.get("real_time_factor")
+    if isinstance(rtf, (int, float)) and np.isfinite(rtf):
+        # the run's average: a replay has no per-frame wall clock
+        log.send_series(E.REAL_TIME_FACTOR, np.array([t[0], t[-1]]), np.array([rtf, rtf]), path=E.REAL_TIME_FACTOR)
+    rec.flush()
+    if used.mode == "save":
+        rec.disconnect()
+    return ReplayReport(used, len(t), [s for s, _, _ in series], notes)
+
+
+def _robot_poses(robot, cls, params, columns, data, records, links):
+    """(poses (n, nl, 7), times (n,), note) from the recording, or computed from the robot component."""
+    t = data[:, 0]
+    ref = f"{robot}.link_poses"
+    if ref in records:
+        idx, _ = signal_columns(columns, ref)
+        if len(idx) == 7 * len(links):
+            return data[:, idx].reshape(len(t), len(links), 7), t, None
+    comp = cls(robot, params)
+    h = Harness(comp)
+    calc = getattr(comp, comp.outputs["link_poses"].calc or "output")
+    nq = h.y.q.size if hasattr(h.y, "q") else None
+    qref = f"{robot}.q"
+    if qref in records and nq:
+        idx, _ = signal_columns(columns, qref)
+        if len(idx) == nq:
+            out = np.empty((len(t), len(links), 7))
+            x = h.x.copy()
+            x[nq:] = 0.0
+            for k in range(len(t)):           # replay only: one forward kinematics per recorded row
+                x[:nq] = data[k, idx]
+                calc(t[k], x, h.u, h.y)
+                out[k] = h.y.link_poses
+            return out, t, None
+    calc(t[0], h.x, h.u, h.y)
+    return (h.y.link_poses.copy()[None], t[:1],
+            f"{ref} and {qref} were not recorded, so the robot is shown at its initial pose; "
+            f"add '{ref}' (or '{qref}') to the scene's record list to replay its motion")

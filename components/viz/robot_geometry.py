@@ -1,0 +1,176 @@
+"""A robot's visual geometry from its URDF: one triangle mesh per link, in the link frame.
+
+Each ``<link>`` (document order, the order of the multibody's ``link_poses``
+rows) gets the union of its ``<visual>`` elements: cylinders (URDF: axis z,
+centred), boxes, spheres and mesh files (STL/OBJ/..., ``scale`` honoured),
+each placed by its ``<origin>`` (xyz, rpy = R_z R_y R_x) and coloured by its
+material (``<material><color rgba>`` inline or by name). Mesh file names
+resolve against the URDF's folder (``../meshes/...`` for snakesim robots);
+a generated screw mesh not on disk (a design variant) is built in memory
+from its :class:`~snakesim.robots.screw_mesh.ScrewGeometry`. Links without
+visuals get no mesh. Units: m.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import sys
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+
+from snakesim.components.multibody.urdf import rpy_matrix
+
+DEFAULT_RGBA = (0.7, 0.7, 0.72, 1.0)
+CYLINDER_SECTIONS = 32
+
+
+@dataclasses.dataclass(frozen=True)
+class LinkMesh:
+    """Triangle mesh of one link in its link frame: vertices (n, 3) m, faces (m, 3),
+    normals (n, 3), colors (n, 4) uint8."""
+
+    link: str
+    vertices: np.ndarray
+    faces: np.ndarray
+    normals: np.ndarray
+    colors: np.ndarray
+
+
+@dataclasses.dataclass(frozen=True)
+class RobotSource:
+    """The robot as the multibody component names it (same keys as its params)."""
+
+    urdf: str | None = None
+    design: str | None = None
+    modules: int | None = None
+    head: bool | None = None
+    robot: dict = dataclasses.field(default_factory=dict)
+
+    @classmethod
+    def of(cls, params) -> "RobotSource":
+        get = params.get if isinstance(params, dict) else lambda k, d=None: getattr(params, k, d)
+        return cls(get("urdf"), get("design"), get("modules"), get("head"), dict(get("robot") or {}))
+
+    @property
+    def empty(self) -> bool:
+        return self.urdf is None and self.design is None
+
+
+def load_source(src: RobotSource) -> tuple[str, Path, dict]:
+    """(URDF text, folder mesh names are relative to, {mesh file name: ScrewGeometry})."""
+    from snakesim.robots import load_robot
+    from snakesim.robots.description import URDF_DIR
+
+    if src.design is not None:
+        desc = load_robot(src.design, modules=src.modules, head=src.head, urdf=src.urdf, **src.robot)
+        return desc.urdf, desc.base_dir, dict(desc.screw_meshes)
+    if src.urdf is None:
+        raise ValueError("no robot: give 'urdf' (text or path) or 'design'")
+    if src.urdf.lstrip().startswith("<"):
+        return src.urdf, URDF_DIR, {}
+    path = Path(src.urdf)
+    if not path.is_file():
+        raise FileNotFoundError(f"URDF file '{path}' does not exist")
+    return path.read_text(encoding="utf-8"), path.resolve().parent, {}
+
+
+def link_meshes(src: RobotSource) -> list[LinkMesh]:
+    """One :class:`LinkMesh` per URDF link that has visuals, document order."""
+    text, base_dir, screws = load_source(src)
+    return meshes_from_urdf(text, base_dir, screws)
+
+
+def meshes_from_urdf(text: str, base_dir: Path, screws: dict | None = None) -> list[LinkMesh]:
+    root = ET.fromstring(text)
+    named = {m.get("name"): _rgba(m) for m in root.findall("material")}
+    out = []
+    for link in root.findall("link"):
+        parts = []
+        for vis in link.findall("visual"):
+            mesh = _geometry(vis.find("geometry"), base_dir, screws or {}, link.get("name"))
+            if mesh is None:
+                continue
+            R, p = _origin(vis.find("origin"))
+            mat = vis.find("material")
+            rgba = DEFAULT_RGBA
+            if mat is not None:
+                rgba = _rgba(mat) or named.get(mat.get("name")) or DEFAULT_RGBA
+            v = np.asarray(mesh.vertices) @ R.T + p
+            n = np.asarray(mesh.vertex_normals) @ R.T
+            c = np.tile(np.round(np.asarray(rgba) * 255).astype(np.uint8), (len(v), 1))
+            parts.append((v, np.asarray(mesh.faces), n, c))
+        if parts:
+            out.append(_merge(link.get("name"), parts))
+    return out
+
+
+def _merge(name, parts) -> LinkMesh:
+    offsets = np.cumsum([0] + [len(v) for v, _, _, _ in parts[:-1]])
+    return LinkMesh(name,
+                    np.vstack([v for v, _, _, _ in parts]).astype(np.float32),
+                    np.vstack([f + o for (_, f, _, _), o in zip(parts, offsets)]).astype(np.uint32),
+                    np.vstack([n for _, _, n, _ in parts]).astype(np.float32),
+                    np.vstack([c for _, _, _, c in parts]))
+
+
+def _origin(el) -> tuple[np.ndarray, np.ndarray]:
+    if el is None:
+        return np.eye(3), np.zeros(3)
+    xyz = np.array([float(s) for s in el.get("xyz", "0 0 0").split()])
+    rpy = [float(s) for s in el.get("rpy", "0 0 0").split()]
+    return rpy_matrix(rpy), xyz
+
+
+def _rgba(mat_el):
+    c = mat_el.find("color") if mat_el is not None else None
+    if c is None or c.get("rgba") is None:
+        return None
+    return tuple(float(s) for s in c.get("rgba").split())
+
+
+def _geometry(geom, base_dir: Path, screws: dict, link: str):
+    """A trimesh for one <geometry>, smooth-shaded with creases kept; None if unusable."""
+    import trimesh
+
+    if geom is None or len(geom) == 0:
+        return None
+    g = geom[0]
+    if g.tag == "cylinder":
+        m = trimesh.creation.cylinder(radius=float(g.get("radius")), height=float(g.get("length")),
+                                      sections=CYLINDER_SECTIONS)
+    elif g.tag == "box":
+        m = trimesh.creation.box(extents=[float(s) for s in g.get("size").split()])
+    elif g.tag == "sphere":
+        m = trimesh.creation.icosphere(subdivisions=2, radius=float(g.get("radius")))
+    elif g.tag == "mesh":
+        m = _mesh_file(g.get("filename", ""), base_dir, screws, link)
+        if m is None:
+            return None
+        if g.get("scale"):
+            m.apply_scale([float(s) for s in g.get("scale").split()])
+    else:
+        return None
+    return m.smooth_shaded
+
+
+def _mesh_file(filename: str, base_dir: Path, screws: dict, link: str):
+    import trimesh
+
+    name = filename
+    for prefix in ("package://", "file://"):
+        if name.startswith(prefix):
+            name = name[len(prefix):]
+    path = Path(name) if Path(name).is_absolute() else base_dir / name
+    if path.is_file():
+        return trimesh.load(path, force="mesh")
+    geometry = screws.get(Path(name).name)
+    if geometry is not None:
+        from snakesim.robots.screw_mesh import screw_triangles
+
+        tri = np.asarray(screw_triangles(geometry)).reshape(-1, 3)
+        return trimesh.Trimesh(tri, np.arange(len(tri)).reshape(-1, 3), process=True)
+    sys.stderr.write(f"snakesim viz: link '{link}': visual mesh '{filename}' not found (looked in {path}); "
+                     "shown without it\n")
+    return None

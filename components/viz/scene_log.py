@@ -1,0 +1,213 @@
+"""Writes a scene into a rerun recording: static geometry once, then batched frames.
+
+Shared by the live sink and ``snakesim replay`` so both produce the same
+entities (layout: :mod:`.entities`). Costs are kept off the simulation:
+
+- meshes (robot links, terrain) are logged once, static; afterwards a frame
+  is only each link's Transform3D;
+- frames are buffered and sent with ``send_columns``, one call per entity
+  per ``flush_frames`` frames (per-frame ``log`` calls cost ~80 µs per
+  entity; a 30-frame column batch ~10 µs per entity-frame);
+- contacts and tethers change size every frame: they are batched the
+  same way, as partitioned columns (one partition per frame; an empty one
+  clears the previous frame's), their colours and radii logged once, static.
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+
+from . import entities as E
+
+AXIS_COLORS = np.array([[230, 60, 60, 255], [60, 200, 60, 255], [60, 110, 240, 255]], dtype=np.uint8)
+NORMAL_COLOR = (70, 140, 255, 255)
+FRICTION_COLOR = (255, 150, 40, 255)
+POINT_COLOR = (255, 230, 60, 255)
+TETHER_COLOR = (250, 200, 40, 255)
+
+
+class SceneLog:
+    """One recording's writer.
+
+    rec         rerun.RecordingStream
+    robot       multibody component name (entity ``world/physical/<robot>``), or None
+    link_names  rows of the pose arrays this log receives (the multibody's link order)
+    meshes      :class:`~.robot_geometry.LinkMesh` list (links without one get no entity)
+    series      [(signal 'comp.port', element names or None, width)], one plot entity each
+    """
+
+    def __init__(self, rec, *, robot: str | None = None, link_names: Sequence[str] = (), meshes=(),
+                 series: Sequence[tuple[str, Sequence[str] | None, int]] = (), body_frames: bool = False,
+                 frame_length: float = 0.1, force_scale: float = 0.002, flush_frames: int = 30,
+                 contacts: bool = False, tethers: bool = False):
+        import rerun as rr
+
+        self.rr, self.rec = rr, rec
+        self.robot = robot
+        self.link_names = list(link_names)
+        row = {n: i for i, n in enumerate(self.link_names)}
+        self.meshes = [m for m in meshes if m.link in row]
+        self.mesh_rows = np.array([row[m.link] for m in self.meshes], dtype=np.int64)
+        self.link_paths = [E.link_path(robot or "robot", m.link) for m in self.meshes]
+        self.body_frames, self.frame_length = body_frames, float(frame_length)
+        self.frame_paths = [E.frame_path(n) for n in self.link_names] if body_frames else []
+        self.force_scale = float(force_scale)
+        self.series = [(s, tuple(names) if names else None, int(w)) for s, names, w in series]
+        n = max(1, int(flush_frames))
+        self._cap = n
+        self._t = np.zeros(n)
+        self._poses = np.zeros((n, len(self.link_names), 7))
+        self._vals = [np.zeros((n, w)) for _, _, w in self.series]
+        self._rtf = np.full(n, np.nan)
+        self._n = 0
+        self.contacts, self.tethers = contacts, tethers
+        self._c_pts, self._c_fn, self._c_ft, self._tethers = [], [], [], []
+
+    # -- static geometry ------------------------------------------------------------------
+    def log_static(self, terrain_mesh=None) -> None:
+        rr, rec = self.rr, self.rec
+        rec.log(E.WORLD, rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+        for path, m in zip(self.link_paths, self.meshes):
+            rec.log(f"{path}/visual", rr.Mesh3D(vertex_positions=m.vertices, triangle_indices=m.faces,
+                                                vertex_normals=m.normals, vertex_colors=m.colors), static=True)
+        if self.body_frames:
+            L = self.frame_length
+            for name, path in zip(self.link_names, self.frame_paths):
+                rec.log(f"{path}/axes", rr.Arrows3D(vectors=np.eye(3) * L, colors=AXIS_COLORS, radii=0.02 * L,
+                                                    labels=[name, "", ""], show_labels=False), static=True)
+        if terrain_mesh is not None:
+            rec.log(E.TERRAIN, rr.Mesh3D(vertex_positions=terrain_mesh.vertices, triangle_indices=terrain_mesh.faces,
+                                         vertex_normals=terrain_mesh.normals, vertex_colors=terrain_mesh.colors,
+                                         face_rendering=rr.components.MeshFaceRendering.DoubleSided), static=True)
+        for signal, names, width in self.series:
+            if names and len(names) == width:
+                rec.log(E.series_path(signal), rr.SeriesLines(names=list(names)), static=True)
+        rec.log(E.REAL_TIME_FACTOR, rr.SeriesLines(names=["real-time factor"]), static=True)
+        if self.contacts:             # styles once, static; per frame only positions and vectors
+            rec.log(E.CONTACT_POINTS, rr.Points3D.from_fields(colors=POINT_COLOR, radii=0.008), static=True)
+            rec.log(E.CONTACT_NORMAL, rr.Arrows3D.from_fields(colors=NORMAL_COLOR, radii=0.004), static=True)
+            rec.log(E.CONTACT_FRICTION, rr.Arrows3D.from_fields(colors=FRICTION_COLOR, radii=0.004), static=True)
+        if self.tethers:
+            rec.log(E.TETHERS, rr.LineStrips3D.from_fields(colors=TETHER_COLOR, radii=0.006), static=True)
+
+    # -- frames (buffered) ----------------------------------------------------------------
+    def add_frame(self, t: float, poses=None, values: Sequence[np.ndarray] = (), rtf: float = np.nan,
+                  contacts=None, tethers=None) -> None:
+        """Queue one frame: link poses [nl, 7] (xyz + quaternion xyzw, world), one array
+        per series, the real-time factor, the contact set and tether polylines (when the
+        log was made with ``contacts``/``tethers``). Sent when ``flush_frames`` are queued."""
+        k = self._n
+        self._t[k] = t
+        if poses is not None and self._poses.shape[1]:
+            self._poses[k] = poses
+        for buf, v in zip(self._vals, values):
+            buf[k] = np.ravel(v)
+        self._rtf[k] = rtf
+        if self.contacts:
+            self._queue_contacts(contacts)
+        if self.tethers:
+            self._tethers.append(tether_strips(tethers) or [])
+        self._n = k + 1
+        if self._n == self._cap:
+            self.flush()
+
+    def flush(self) -> None:
+        n = self._n
+        if n == 0:
+            return
+        self._n = 0
+        t = self._t[:n]
+        self.send_poses(t, self._poses[:n])
+        for (signal, _, _), buf in zip(self.series, self._vals):
+            self.send_series(signal, t, buf[:n])
+        ok = np.isfinite(self._rtf[:n])
+        if ok.any():
+            self.send_series(E.REAL_TIME_FACTOR, t[ok], self._rtf[:n][ok], path=E.REAL_TIME_FACTOR)
+        if self.contacts:
+            self._flush_contacts(t)
+        if self.tethers:
+            self._flush_tethers(t)
+
+    def send_poses(self, t: np.ndarray, poses: np.ndarray) -> None:
+        """Transforms of every meshed link (and body frame) at times t (n,) from poses (n, nl, 7)."""
+        rr, rec = self.rr, self.rec
+        if not len(t) or not poses.shape[1]:
+            return
+        index = [rr.TimeColumn(E.TIMELINE, duration=t)]
+        for path, row in zip(self.link_paths, self.mesh_rows):
+            p = poses[:, row]
+            rec.send_columns(path, indexes=index,
+                             columns=rr.Transform3D.columns(translation=p[:, :3], quaternion=p[:, 3:]))
+        for row, path in enumerate(self.frame_paths):
+            p = poses[:, row]
+            rec.send_columns(path, indexes=index,
+                             columns=rr.Transform3D.columns(translation=p[:, :3], quaternion=p[:, 3:]))
+
+    def send_series(self, signal: str, t: np.ndarray, values: np.ndarray, path: str | None = None) -> None:
+        rr = self.rr
+        v = np.asarray(values, dtype=float).reshape(len(t), -1)
+        self.rec.send_columns(path or E.series_path(signal), indexes=[rr.TimeColumn(E.TIMELINE, duration=t)],
+                              columns=rr.Scalars.columns(scalars=v))
+
+    # -- contacts and tethers: variable size per frame, batched as partitions ------------------
+    def _queue_contacts(self, c) -> None:
+        """Points and force arrows of a contact set: anything with ``points`` (m, 3) and
+        ``forces`` (m, 3); with ``normals`` and ``normal_force`` the force is split into
+        its normal and friction parts. Arrow length = force · force_scale (m/N)."""
+        # copies: a producer may reuse its arrays next step
+        pts = np.array(getattr(c, "points", np.zeros((0, 3))), dtype=float).reshape(-1, 3) if c is not None \
+            else np.zeros((0, 3))
+        f = np.asarray(c.forces, dtype=float).reshape(-1, 3) if len(pts) else np.zeros((0, 3))
+        normals = getattr(c, "normals", None) if len(pts) else None
+        fn = getattr(c, "normal_force", None) if len(pts) else None
+        if normals is not None and fn is not None:
+            f_n = np.asarray(fn, dtype=float).reshape(-1, 1) * np.asarray(normals, dtype=float).reshape(-1, 3)
+            rest = f - f_n
+        else:
+            f_n, rest = f, np.zeros((0, 3))        # no normals: the whole force on the normal entity
+        self._c_pts.append(pts)
+        self._c_fn.append(self.force_scale * f_n)
+        self._c_ft.append((pts[: len(rest)], self.force_scale * rest))
+
+    def _flush_contacts(self, t) -> None:
+        rr, rec = self.rr, self.rec
+        index = [rr.TimeColumn(E.TIMELINE, duration=t)]
+        lens = [len(p) for p in self._c_pts]
+        pts = np.concatenate(self._c_pts) if sum(lens) else np.zeros((0, 3))
+        rec.send_columns(E.CONTACT_POINTS, indexes=index, columns=rr.Points3D.columns(positions=pts).partition(lens))
+        fn = np.concatenate(self._c_fn) if sum(lens) else np.zeros((0, 3))
+        rec.send_columns(E.CONTACT_NORMAL, indexes=index,
+                         columns=rr.Arrows3D.columns(vectors=fn, origins=pts).partition(lens))
+        flen = [len(o) for o, _ in self._c_ft]
+        org = np.concatenate([o for o, _ in self._c_ft]) if sum(flen) else np.zeros((0, 3))
+        vec = np.concatenate([v for _, v in self._c_ft]) if sum(flen) else np.zeros((0, 3))
+        rec.send_columns(E.CONTACT_FRICTION, indexes=index,
+                         columns=rr.Arrows3D.columns(vectors=vec, origins=org).partition(flen))
+        self._c_pts, self._c_fn, self._c_ft = [], [], []
+
+    def _flush_tethers(self, t) -> None:
+        rr = self.rr
+        lens = [len(s) for s in self._tethers]
+        strips = [s for frame in self._tethers for s in frame]
+        self.rec.send_columns(E.TETHERS, indexes=[rr.TimeColumn(E.TIMELINE, duration=t)],
+                              columns=rr.LineStrips3D.columns(strips=strips).partition(lens))
+        self._tethers = []
+
+
+def tether_strips(value) -> list[np.ndarray] | None:
+    if value is None:
+        return None
+    for attr in ("strips", "points", "polyline"):
+        if hasattr(value, attr) and not isinstance(value, np.ndarray):
+            value = getattr(value, attr)
+            break
+    if isinstance(value, (list, tuple)):
+        return [np.asarray(s, dtype=float).reshape(-1, 3) for s in value]
+    a = np.asarray(value, dtype=float)
+    if a.ndim == 2 and a.shape[1] == 3:
+        return [a]
+    if a.ndim == 3 and a.shape[2] == 3:
+        return list(a)
+    return None

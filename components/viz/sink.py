@@ -1,0 +1,243 @@
+"""Rerun viewer sink: the robot, terrain, contacts, tethers and recorded signals, live or to an .rrd.
+
+A sink (``is_sink``): it keeps its upstream alive, has no outputs and runs
+as a discrete component at the viewer rate (its ``rate``; without one it
+decimates itself to ``viewer_rate``), so the simulation pays for logging
+30 times per simulated second, not every step. ``snakesim run --viz ...``
+adds and wires it (:mod:`.attach`); in YAML::
+
+    viz: {type: rerun_viewer, rate: 30.30303, params: {target: "save run.rrd", design: eels-1.0, modules: 10}}
+    connections: [robot.link_poses -> viz.link_poses, ground.terrain -> viz.terrain]
+
+in   link_poses[nl, 7]  m, 1  [x, y, z, qx, qy, qz, qw] per link, world (the multibody's; optional)
+     terrain            Terrain, drawn once as a static mesh (optional)
+     contacts           any structured value with ``points`` (m, 3) and ``forces`` (m, 3) N,
+                        e.g. ContactSet; split into normal and friction arrows when it also
+                        has ``normals`` and ``normal_force`` (optional)
+     tethers            any structured value with ``strips``/``points`` polylines (optional);
+                        without it, params.tether_lines are drawn as straight segments from
+                        each tie point (link pose · offset) to its anchor
+     s0 .. s{k-1}       one numeric input of any shape per entry of params.series (the signal
+                        it plots, 'comp.port'); made per instance from the params
+out  none
+
+First frame: opens the recording (:func:`.target.open_recording`: headless
+machines never spawn a window), logs the static meshes. Every frame: link
+transforms, series values and the real-time factor are queued and sent in
+``send_columns`` batches (:class:`.scene_log.SceneLog`); contacts and tethers
+are logged directly. Everything is sent and the file closed at ``t_end``,
+on :meth:`close`, or at interpreter exit. A later run of the same instance
+(time going back) starts a new recording. Entity layout and the physical /
+ornamental contract: :mod:`.entities`.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+import weakref
+from functools import lru_cache
+
+import numpy as np
+from pydantic import Field, field_validator
+
+from snakesim.components.terrain import Terrain
+from snakesim.framework import Component, Input, Params
+
+from . import entities as E
+from .robot_geometry import RobotSource, link_meshes, load_source
+from .target import VizTargetError, open_recording, parse_target
+
+Vec3 = tuple[float, float, float]
+
+
+class RerunSinkParams(Params):
+    target: str = Field("save snakesim.rrd", description="spawn | serve | save FILE.rrd")
+    viewer_rate: float = Field(30.0, gt=0, description="Hz; frames per simulated second when the component has no rate")
+    application_id: str = "snakesim"
+    recording_id: str | None = Field(None, description="rerun recording id (default: a fresh one per run)")
+    # the robot link_poses come from: the multibody's source keys and component name
+    robot_component: str = Field("robot", description="entity name of the robot: world/physical/<this>")
+    urdf: str | None = Field(None, description="URDF text or path (as the multibody's)")
+    design: str | None = Field(None, description="snakesim.robots design (as the multibody's)")
+    modules: int | None = Field(None, ge=1)
+    head: bool | None = None
+    robot: dict = Field(default_factory=dict, description="robot generator parameters (as the multibody's)")
+    # what to draw
+    terrain_extent: float = Field(4.0, gt=0, description="m: unbounded terrains drawn this far around the centre")
+    terrain_cell: float = Field(0.25, gt=0, description="m: checkerboard cell of drawn terrain")
+    terrain_center: Vec3 | None = Field(None, description="m, world; default: the robot's start centroid")
+    terrain_cutaway: Vec3 | None = Field((0.0, -0.6, 0.8), description="enclosing terrain cut away towards this")
+    body_frames: bool = Field(False, description="draw every link frame (ornamental)")
+    frame_length: float = Field(0.1, gt=0, description="m, body frame axis length")
+    force_scale: float = Field(0.002, gt=0, description="m of arrow per N of contact force")
+    series: list[str] = Field(default_factory=list, description="'comp.port' plotted from inputs s0, s1, ...")
+    tether_lines: list[dict] = Field(default_factory=list,
+                                     description="[{link, offset, anchor}]: straight ropes drawn from link_poses")
+    flush_frames: int = Field(30, ge=1, description="frames per send_columns batch")
+    t_end: float | None = Field(None, description="s: send everything and close at this time")
+
+    @field_validator("target")
+    @classmethod
+    def _target(cls, v):
+        try:
+            parse_target(v)
+        except VizTargetError as e:
+            raise ValueError(str(e)) from None
+        return v
+
+
+@lru_cache(maxsize=16)
+def _link_names(key: str) -> tuple[str, ...]:
+    import xml.etree.ElementTree as ET
+
+    src = RobotSource(**json.loads(key))
+    if src.empty:
+        return ()
+    text, _, _ = load_source(src)
+    return tuple(link.get("name") for link in ET.fromstring(text).findall("link"))
+
+
+def link_names(p) -> tuple[str, ...]:
+    """The URDF's links in document order: the rows of the multibody's link_poses."""
+    src = RobotSource.of(p)
+    return _link_names(json.dumps(src.__dict__, sort_keys=True, default=str))
+
+
+def series_input_name(i: int) -> str:
+    return f"s{i}"
+
+
+class RerunSink(Component[RerunSinkParams]):
+    type_name = "rerun_viewer"
+    Params = RerunSinkParams
+    is_sink = True
+
+    link_poses = Input(shape=lambda p: (len(link_names(p)), 7), unit=None, default=0.0,
+                       doc="[x, y, z, qx, qy, qz, qw] per link, world")
+    terrain = Input(type=Terrain, required=False, doc="drawn once, static")
+    contacts = Input(type=object, required=False, doc="anything with points (m,3) and forces (m,3)")
+    tethers = Input(type=object, required=False, doc="anything with strips/points polylines")
+
+    def setup(self):
+        p = self.p
+        self.target = parse_target(p.target)
+        self.links = link_names(p)
+        # series inputs are per instance: one numeric input of any shape per signal
+        extra = {}
+        for i, _ in enumerate(p.series):
+            port = Input(shape=None, unit=None, default=np.zeros(0))
+            port.name = series_input_name(i)
+            extra[port.name] = port
+        self.inputs = {**type(self).inputs, **extra}
+        self._period = 1.0 / (self.rate or p.viewer_rate)
+        # the slow parts (mesh building, rerun's import: ~2 s) happen at build time, not in the run
+        import rerun.blueprint  # noqa: F401
+
+        self._meshes = link_meshes(RobotSource.of(p)) if self.links else []
+        self._log = None
+        self._finalizer = None
+        self._last_t = -np.inf
+        self._next_t = -np.inf
+        self.used_target = None
+
+    # -- the per-frame path ---------------------------------------------------------------
+    def update(self, t, xd, u):
+        if t < self._last_t:                         # a new run of the same instance
+            self.close()
+            self._last_t = self._next_t = -np.inf
+        if self.rate is None:                        # no scheduler rate: decimate here
+            if t < self._next_t - 1e-9 * self._period:
+                return
+            self._next_t = t + self._period
+        if self._log is None:
+            if self._last_t > -np.inf:               # closed at t_end: nothing more this run
+                return
+            self._open(t, u)
+        wall = time.perf_counter()
+        rtf = (t - self._last_t) / (wall - self._last_wall) if self._last_t > -np.inf else np.nan
+        self._last_t, self._last_wall = t, wall
+        tethers = u.tethers if self._has_tethers else (
+            self._ropes.segments(self._poses) if self._ropes is not None else None)
+        self._log.add_frame(t, self._poses, self._series, rtf,
+                            contacts=u.contacts if self._has_contacts else None, tethers=tethers)
+        if self.p.t_end is not None and t >= self.p.t_end - 0.5 * self._period:
+            self.close()
+
+    # -- opening and closing --------------------------------------------------------------
+    def _open(self, t, u):
+        from .blueprint import default_blueprint
+        from .terrain_geometry import terrain_mesh
+
+        p = self.p
+        self._poses = u.link_poses                   # input views: never reallocated
+        self._series = [getattr(u, series_input_name(i)) for i in range(len(p.series))]
+        self._has_contacts = u.contacts is not None
+        self._has_tethers = u.tethers is not None
+        self._ropes = _ropes(p.tether_lines, self.links) if not self._has_tethers else None
+        pos = np.asarray(self._poses)[:, :3] if len(self.links) else np.zeros((1, 3))
+        center = np.asarray(p.terrain_center) if p.terrain_center is not None else pos.mean(axis=0)
+        terrain = u.terrain
+        tmesh = None
+        if terrain is not None:
+            tmesh = terrain_mesh(terrain, center, p.terrain_extent, p.terrain_cell, p.terrain_cutaway)
+        series = [(s, None, int(np.size(v))) for s, v in zip(p.series, self._series)]
+        bp = default_blueprint(pos, [E.series_path(s) for s in p.series])
+        rec, self.used_target = open_recording(self.target, p.application_id, p.recording_id, blueprint=bp)
+        from .scene_log import SceneLog
+
+        self._log = SceneLog(rec, robot=p.robot_component, link_names=self.links, meshes=self._meshes, series=series,
+                             body_frames=p.body_frames, frame_length=p.frame_length, force_scale=p.force_scale,
+                             flush_frames=p.flush_frames, contacts=self._has_contacts,
+                             tethers=self._has_tethers or self._ropes is not None)
+        self._log.log_static(tmesh)
+        self._finalizer = weakref.finalize(self, _finish, self._log, rec, self.used_target.mode)
+        self._last_wall = time.perf_counter()
+
+    def close(self) -> None:
+        """Send what is queued and close the recording (idempotent)."""
+        if self._finalizer is not None:
+            self._finalizer()
+        self._finalizer, self._log = None, None
+
+
+class _Ropes:
+    """Straight tether segments: tie point o + R(q)·offset on a link to a world anchor."""
+
+    def __init__(self, rows, offsets, anchors):
+        self.rows, self.offsets, self.anchors = rows, offsets, anchors
+
+    def segments(self, poses) -> np.ndarray:
+        P = np.asarray(poses)[self.rows]
+        qv, w = P[:, 3:6], P[:, 6:7]
+        # offsets rotated by the unit quaternions (x, y, z, w): v + 2w(q×v) + 2q×(q×v)
+        c = np.cross(qv, self.offsets)
+        tie = P[:, :3] + self.offsets + 2 * w * c + 2 * np.cross(qv, c)
+        return np.stack([tie, self.anchors], axis=1)
+
+
+def _ropes(lines, links) -> _Ropes | None:
+    if not lines:
+        return None
+    row = {n: i for i, n in enumerate(links)}
+    bad = [d.get("link") for d in lines if d.get("link") not in row]
+    if bad:
+        raise ValueError(f"tether_lines: links {bad} are not robot links; links: {', '.join(links)}")
+    return _Ropes(np.array([row[d["link"]] for d in lines]),
+                  np.array([d.get("offset", (0.0, 0.0, 0.0)) for d in lines], dtype=float),
+                  np.array([d["anchor"] for d in lines], dtype=float))
+
+
+def _finish(log, rec, mode: str) -> None:
+    log.flush()
+    rec.flush()
+    if mode == "save":
+        rec.disconnect()                             # writes the .rrd footer
+    elif mode == "serve" and sys.stdin is not None and sys.stdin.isatty():
+        sys.stderr.write("snakesim viz: run finished; still serving the recording, Ctrl-C to stop\n")
+        try:
+            while True:
+                time.sleep(1.0)
+        except KeyboardInterrupt:
+            pass
