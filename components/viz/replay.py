@@ -8,12 +8,14 @@ Reads ``config.yaml`` (the resolved configuration) and ``signals.csv``:
   columns; forward kinematics of recorded ``<robot>.q`` through the robot
   component itself; otherwise the initial pose only (with a note);
 - terrain: the component with a Terrain output, built from its params;
+- tethers: straight ropes from a tethers component's params and the poses;
 - one plot per recorded signal, every row of every column; the real-time
   factor is the run's average from ``summary.json``.
 
 The entities are those of a live ``--viz`` recording (:mod:`.entities`);
 contacts and tethers are not in signals.csv (structured signals are not
-recorded), so a replay has none.
+recorded), so a replay has none; tethers given as a structured signal
+rather than as tethers params are not replayed either.
 """
 
 from __future__ import annotations
@@ -150,15 +152,28 @@ def replay(run_dir, target: VizTarget | None = None, body_frames: bool = False, 
         if idx:
             series.append((ref, names, idx))
 
+    # tethers: straight ropes from a tethers component's params and the poses
+    ropes = None
+    if poses is not None:
+        from .attach import _tether_lines
+        from .sink import _ropes
+
+        lines = next((_tether_lines(spec.get("params", {})) for spec in cfg["components"].values()
+                      if _tether_lines(spec.get("params", {}))), [])
+        ropes = _ropes(lines, links) if lines else None
+
     first = poses[0, :, :3] if poses is not None and poses.shape[1] else np.zeros((1, 3))
     bp = default_blueprint(first, [E.series_path(s) for s, _, _ in series])
     rec, used = open_recording(target, "snakesim", blueprint=bp)
     log = SceneLog(rec, robot=robot, link_names=links, meshes=meshes,
                    series=[(s, names, len(idx)) for s, names, idx in series],
-                   body_frames=body_frames, frame_length=vp.frame_length, force_scale=vp.force_scale)
+                   body_frames=body_frames, frame_length=vp.frame_length, force_scale=vp.force_scale,
+                   tethers=ropes is not None)
     log.log_static(tmesh)
     if poses is not None:
         log.send_poses(pose_t, poses)
+    if ropes is not None:
+        log.send_tethers(pose_t, [list(ropes.segments(p)) for p in poses])
     for s, _, idx in series:
         log.send_series(s, t, data[:, idx])
     rtf = summary.get("real_time_factor")

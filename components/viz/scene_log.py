@@ -188,12 +188,16 @@ class SceneLog:
         self._c_pts, self._c_fn, self._c_ft = [], [], []
 
     def _flush_tethers(self, t) -> None:
+        self.send_tethers(t, self._tethers)
+        self._tethers = []
+
+    def send_tethers(self, t, frames) -> None:
+        """Tether polylines at times t (n,): frames[i] is a list of (m, 3) strips."""
         rr = self.rr
-        lens = [len(s) for s in self._tethers]
-        strips = [s for frame in self._tethers for s in frame]
+        lens = [len(s) for s in frames]
+        strips = [s for frame in frames for s in frame]
         self.rec.send_columns(E.TETHERS, indexes=[rr.TimeColumn(E.TIMELINE, duration=t)],
                               columns=rr.LineStrips3D.columns(strips=strips).partition(lens))
-        self._tethers = []
 
 
 def tether_strips(value) -> list[np.ndarray] | None:

@@ -225,7 +225,8 @@ def _sdf(t: SdfGrid) -> TerrainMesh:
     if src.is_file():
         import trimesh
 
-        m = trimesh.load(src, force="mesh").smooth_shaded
+        m = trimesh.load(src, force="mesh")
+        m.unmerge_vertices()                         # flat faces: ice blocks have sharp edges
         v = np.asarray(m.vertices, dtype=np.float32)
         col = np.tile(np.append(ICE[0], 255).astype(np.uint8), (len(v), 1))
         return TerrainMesh(v, np.asarray(m.faces, dtype=np.uint32), np.asarray(m.vertex_normals, np.float32), col)
