@@ -4,9 +4,9 @@ from importlib.resources import files
 
 from snakesim.framework import hookimpl
 
-#: `snakesim run` with no ASSEMBLY runs this; it becomes the surface screw
-#: traverse once the robot scenes exist
-DEFAULT_SCENE = "pendulum"
+#: `snakesim run` with no ASSEMBLY runs this: EELS 1.0's 45 s crescent screw traverse
+#: (paper 4.2); the pendulum tutorial stays available by name
+DEFAULT_SCENE = "surface-screw-traverse"
 
 
 @hookimpl

@@ -15,7 +15,10 @@ from .control import CsvTrajectory, JointPid, JointSetpoints, JointSpringDamper,
 from .examples.mass_spring import PointMass, SpringDamper
 from .examples.pendulum import Pendulum, ViscousDamper
 from .monitors import MobilityMonitor
+from .monitors.planar_pose import PlanarPose
+from .control.screw_schedule import ScrewSchedule
 from .multibody import Multibody
+from .placement import PLACEMENT
 from .terrain import TerrainSource
 from .signals.blocks import Gain, Sum, ZeroOrderHold
 from .signals.sources import Constant, Sine, Step
@@ -27,7 +30,8 @@ from .viz.cli import viz_add_commands, viz_run_options  # noqa: F401  (hookimpls
 BUILTIN = (Constant, Step, Sine, Gain, Sum, ZeroOrderHold, Pendulum, ViscousDamper, PointMass, SpringDamper,
            PointContact, HullContact, TerrainSource, Multibody, ScrewSdfContact, ScrewDrive,
            JointPid, JointSpringDamper, JointSetpoints, SerpenoidGait, CsvTrajectory, Schedule, ForceTorqueSensors,
-           Imu, Tethers, WrenchSum, MobilityMonitor, RerunSink)
+           Imu, Tethers, WrenchSum, MobilityMonitor, RerunSink, PlanarPose, ScrewSchedule,
+           *PLACEMENT)
 
 
 @hookimpl

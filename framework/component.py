@@ -106,6 +106,7 @@ class Component(Generic[P]):
             raise ValueError(f"{name}: rate must be > 0 Hz, got {rate}")
         self.rate = rate
         self._stop = StopFlag()
+        self.used_outputs: frozenset[str] = frozenset(type(self).outputs)
         self.setup()
 
     # -- hooks a component overrides ------------------------------------------
@@ -120,6 +121,16 @@ class Component(Generic[P]):
 
     def output(self, t: float, x, u, y) -> None:
         """Compute the outputs that have no ``calc`` method of their own."""
+
+    def bind_outputs(self, used: frozenset[str]) -> None:
+        """Told at build which output ports anything reads (connected, recorded, stop-tested).
+
+        The plan skips a ``calc`` port group nobody reads; ``output()`` is
+        always called (it may have side effects, e.g. ``stop``), so a
+        component with costly outputs there may test ``self.used_outputs``
+        and skip them. Until a build calls this (a Harness), every output is used.
+        """
+        self.used_outputs = used
 
     def derivative(self, t: float, x, u, dx) -> None:
         raise NotImplementedError(f"{type(self).__name__} declares continuous state but no derivative()")

@@ -75,6 +75,8 @@ class Plan:
     stop_flag: StopFlag
     dt: float
     report: dict = field(default_factory=dict)
+    used: set = field(default_factory=set)        # output ports something reads
+    calls: list = field(default_factory=list)     # (Node, call tuple) for every node, in order
 
     # -- the continuous system the integrators see ------------------------------
     @property
@@ -120,6 +122,19 @@ class Plan:
     def __post_init__(self):
         self._manifold = [s for s in self.slices if s.manifold]
         self._lie = [s for s in self._manifold if type(s.comp).dexp_inv is not Component.dexp_inv]
+
+    # -- outputs nobody reads ------------------------------------------------------------
+    def require(self, refs) -> None:
+        """Mark more output ports as read (e.g. recorded by a Simulator built later): their
+        components are told and skipped groups join the major pass again."""
+        new = {r for r in refs if r not in self.used}
+        if not new:
+            return
+        self.used |= new
+        for name in {r.comp for r in new}:
+            c = self.components[name]
+            c.bind_outputs(frozenset(p for p in c.outputs if PortRef(name, p) in self.used))
+        self.major[:] = _major_lists(self.calls, self.n_phases, self.used)
 
     def component_of_x(self, index: int) -> str:
         for s in self.slices:
@@ -403,6 +418,17 @@ def _phase_count(periods: dict[str, int]) -> int:
     return n
 
 
+def _evaluated(node: Node, used) -> bool:
+    """A ``calc`` port group is pure by contract: skipped when none of its ports is read.
+    ``output()`` always runs (it may have side effects such as ``stop``)."""
+    return node.method == node.comp.output or any(PortRef(node.comp.name, p) in used for p in node.ports)
+
+
+def _major_lists(calls, n_phases, used) -> list[list[tuple]]:
+    return [[call for node, call in calls if phase % node.period == 0 and _evaluated(node, used)]
+            for phase in range(n_phases)]
+
+
 def build(resolved: Resolved, registry) -> Plan:
     dt = resolved.sim.dt
     comps = _instantiate(resolved, registry)
@@ -438,8 +464,12 @@ def build(resolved: Resolved, registry) -> Plan:
         n = node.comp.name
         return (node.method, x_of.get(n, xd_of.get(n)), u_of[n], y_of[n])
 
+    used = set(sources.values()) | set(recorded) | set(stopped)
+    for n, c in comps.items():
+        c.bind_outputs(frozenset(p for p in c.outputs if PortRef(n, p) in used))
+    calls = [(nodes[i], call(nodes[i])) for i in order]
     minor = [call(nodes[i]) for i in order if i in minor_set]
-    major = [[call(nodes[i]) for i in order if phase % nodes[i].period == 0] for phase in range(n_phases)]
+    major = _major_lists(calls, n_phases, used)
     update_comps = [c for n, c in comps.items() if dstates[n] is not None or c.is_sink]
     updates = [[(c.update, xd_of.get(c.name), u_of[c.name]) for c in update_comps if phase % periods[c.name] == 0]
                for phase in range(n_phases)]
@@ -453,6 +483,7 @@ def build(resolved: Resolved, registry) -> Plan:
         "pruned": pruned,
         "state_size": {"continuous": int(X.size), "tangent": int(DX.size), "discrete": int(XD.size)},
         "evaluation_order": [nodes[i].label() for i in order],
+        "unread_outputs": sorted(f"{n}.{p}" for n, c in comps.items() for p in c.outputs if PortRef(n, p) not in used),
         "continuous_stage_order": [nodes[i].label() for i in order if i in minor_set],
         "rates_hz": sorted({c.rate for c in comps.values() if c.rate is not None}),
         "phases": n_phases,
@@ -462,4 +493,4 @@ def build(resolved: Resolved, registry) -> Plan:
     return Plan(components=comps, pruned=pruned, infos=infos, sources=sources, out_buffers=out_buffers,
                 nodes=[nodes[i] for i in order], minor=minor, major=major, updates=updates, derivs=derivs,
                 n_phases=n_phases, X=X, DX=DX, XD=XD, slices=slices, dslices=dslices, n_euclid_x=n_euclid,
-                stop_flag=stop_flag, dt=dt, report=report)
+                stop_flag=stop_flag, dt=dt, report=report, used=used, calls=calls)

@@ -15,6 +15,7 @@ At each base tick k (t = t0 + k·dt, never accumulated):
 from __future__ import annotations
 
 import json
+import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -35,7 +36,16 @@ class StopCondition:
     value: float
     reason: str
 
+    def __post_init__(self):
+        # one element (the usual "com z above"): a scalar compare, no temporaries
+        idx = self.index
+        self._one = int(idx[0]) if isinstance(idx, np.ndarray) and idx.size == 1 else None
+
     def hit(self) -> bool:
+        if self._one is not None:
+            x = self.view[self._one]
+            return bool(x > self.value if self.op == "above" else x < self.value if self.op == "below"
+                        else abs(x) > self.value)
         v = self.view[self.index]
         if self.op == "above":
             return bool(np.any(v > self.value))
@@ -87,6 +97,7 @@ class Simulator:
         self.integrator = integrator
         self.record_refs = record or []
         self.stops = compile_stops(plan, stops)
+        plan.require(list(self.record_refs) + [parse_ref(s.signal, plan.components, "output", w) for s, w in stops])
         dt = plan.dt
         if record_rate is None:
             self.record_every = 1
@@ -152,7 +163,8 @@ class Simulator:
                     bad = True
                     stop_reason = f"integrator {integ.name} failed after t = {t:.6g} s: {e}"
                     break
-            if not (np.isfinite(X).all() and np.isfinite(XD).all()):
+            # X·X is finite iff every element is (an overflow to inf only sends it to the exact test)
+            if not (math.isfinite(X.dot(X) + XD.dot(XD)) or (np.isfinite(X).all() and np.isfinite(XD).all())):
                 bad = self._offender()
                 stop_reason = f"non-finite state in component '{bad[0]}' after t = {t:.6g} s ({bad[1]})"
                 break

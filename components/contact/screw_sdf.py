@@ -64,7 +64,7 @@ from .contact_set import ContactSet
 from .kernels import EV_FLOOR, MODES
 from .robot_screws import RobotSource, screw_layout
 from .screw_samples import ScrewContactSamples
-from .sdf_kernels import contact_wrenches, plane_active, plane_query, sample_points, screw_centres
+from .sdf_kernels import contact_wrenches, plane_contact_step, sample_points, screw_centres
 
 
 class MaterialOverride(Params):
@@ -140,10 +140,12 @@ class ScrewSdfContact(Component[ScrewSdfContactParams]):
         self._m = 0
         self._mode = MODES[p.regularisation]
         self._terrain, self._mats = None, None
+        self._plane_call = None
         self._seen_poses, self._seen_vel = np.full((lay.nl, 7), np.nan), np.full((lay.nl, 6), np.nan)
         self._seen_jv, self._seen_terrain = np.full(lay.nj, np.nan), None
         # counters (tests and benches read them): evaluations, screws and samples sent to the narrow phase
         self.stats = {"evaluations": 0, "screws_tested": 0, "samples_queried": 0}
+        self.bind_outputs(self.used_outputs)
 
     def _material_table(self, terrain: Terrain) -> np.ndarray:
         if terrain is not self._terrain:
@@ -155,6 +157,7 @@ class ScrewSdfContact(Component[ScrewSdfContactParams]):
                     row = [v if ov is None else ov for v, ov in zip(row, (o.k, o.c, o.mu, o.ev_a, o.ev_b))]
                 rows.append(row)
             self._terrain, self._mats = terrain, np.array(rows, dtype=np.float64)
+            self._plane_call = None
             # planes are queried in numba (no allocation); every other kind through Terrain.query
             self._plane = None
             if type(terrain) is PlaneTerrain and self.fast_plane:
@@ -172,27 +175,29 @@ class ScrewSdfContact(Component[ScrewSdfContactParams]):
         lay = self.layout
         poses = u.link_poses
         plane = self._plane
-        if self.p.broad_phase:
+        p = self.p
+        st = self.stats
+        if plane is not None:
+            # the whole evaluation in one numba call (the same kernels as below, without the dispatches)
+            n_active, m, n_contact = plane_contact_step(*self._plane_args(u, y))
+            st["evaluations"] += 1
+            st["screws_tested"] += n_active
+            st["samples_queried"] += m
+            self._finish(m, n_contact, terrain, u, y)
+            return
+        if p.broad_phase:
             screw_centres(poses, lay.parent_row, lay.mount_p, self._R, self._centres)
-            if plane is not None:
-                active = self._active[:plane_active(self._centres, self._sphere_r, plane[0], plane[1], self._active)]
-            else:
-                active = np.flatnonzero(terrain.distance_lower_bound(self._centres, self._sphere_r) <= 0.0)
+            active = np.flatnonzero(terrain.distance_lower_bound(self._centres, self._sphere_r) <= 0.0)
         else:
             active = self._all
         m = 0
         if active.size:
             m = sample_points(poses, active, active.size, self._start, self._points_B, lay.parent_row, self._R,
                               self._pts, self._sample, self._owner)
-        st = self.stats
         st["evaluations"] += 1
         st["screws_tested"] += int(active.size)
         st["samples_queried"] += m
-        self._m = m
-        if m and plane is not None:
-            plane_query(m, self._pts, plane[0], plane[1], self._dist, self._normal, self._mat)
-            self._mat[:m] = plane[2]
-        elif m:
+        if m:
             q = terrain.query(self._pts[:m])
             self._dist[:m] = q.distance
             self._normal[:m] = q.normal
@@ -200,15 +205,39 @@ class ScrewSdfContact(Component[ScrewSdfContactParams]):
         n_contact = contact_wrenches(m, self._dist, self._normal, self._mat, self._sample, self._owner, poses,
                                      u.link_velocities, u.joint_v, self._ringc_B, self._radial_B, self._axis_B,
                                      lay.parent_row, lay.screw_row, lay.radius, lay.lead_angle, lay.hand, lay.spin_dof,
-                                     lay.spin_mult, mats, self.p.v_eps, self._mode, self.p.ev_floor, self._R,
+                                     lay.spin_mult, mats, p.v_eps, self._mode, p.ev_floor, self._R,
                                      self._cpt, self._vel, self._force, self._fn, y.wrenches, y.screw_normal_force)
+        self._finish(m, n_contact, terrain, u, y)
+
+    def _plane_args(self, u, y):
+        """plane_contact_step's arguments, built once per (inputs, outputs) pair and terrain: the plan
+        hands the same namespaces every call and their arrays cannot be rebound (held, so ids stay unique)."""
+        c = self._plane_call
+        if c is None or c[0] is not u or c[1] is not y:
+            p, lay, plane = self.p, self.layout, self._plane
+            args = (p.broad_phase, plane[0], plane[1], plane[2], self._sphere_r, self._start, self._points_B,
+                    lay.mount_p, self._active, self._centres, self._pts, self._dist, self._normal, self._mat,
+                    self._sample, self._owner, u.link_poses, u.link_velocities, u.joint_v, self._ringc_B,
+                    self._radial_B, self._axis_B, lay.parent_row, lay.screw_row, lay.radius, lay.lead_angle, lay.hand,
+                    lay.spin_dof, lay.spin_mult, self._mats, p.v_eps, self._mode, p.ev_floor, self._R, self._cpt,
+                    self._vel, self._force, self._fn, y.wrenches, y.screw_normal_force)
+            c = self._plane_call = (u, y, args)
+        return c[2]
+
+    def _finish(self, m, n_contact, terrain, u, y):
+        self._m = m
         y.contacts[0] = n_contact
         y.normal_force[0] = y.screw_normal_force.sum()
-        # what this evaluation saw, so contact_set can tell whether it describes its inputs
-        np.copyto(self._seen_poses, poses)
-        np.copyto(self._seen_vel, u.link_velocities)
-        np.copyto(self._seen_jv, u.joint_v)
-        self._seen_terrain = terrain
+        if self._track_inputs:
+            # what this evaluation saw, so contact_set can tell whether it describes its inputs
+            np.copyto(self._seen_poses, u.link_poses)
+            np.copyto(self._seen_vel, u.link_velocities)
+            np.copyto(self._seen_jv, u.joint_v)
+            self._seen_terrain = terrain
+
+    def bind_outputs(self, used):
+        super().bind_outputs(used)
+        self._track_inputs = "contact_set" in used
 
     def calc_contact_set(self, t, x, u, y):
         if not (u.terrain is self._seen_terrain and np.array_equal(u.link_poses, self._seen_poses)

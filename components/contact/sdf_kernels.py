@@ -195,3 +195,33 @@ def plane_active(centres, radii, origin, n, out_active):
             out_active[k] = s
             k += 1
     return k
+
+
+@njit(cache=True)
+def plane_contact_step(broad_phase, origin, n, region_material, sphere_r, start, points_B, mount_p, active, centres,
+                       points, distance, normal, material, sample, owner, poses, vels, joint_v, ringc_B, radial_B, axis_B,
+                       parent_row, screw_row, radius, lead_angle, hand, spin_dof, spin_mult, mats, v_eps, mode,
+                       ev_floor, R, out_point, out_vel, out_force, out_fn, out_wrench, out_screw_fn):
+    """One contact evaluation against a plane in one call (the screw_sdf hot path, one dispatch):
+    broad phase (screw_centres + plane_active, or every screw), sample_points, plane_query and
+    contact_wrenches, exactly as the component calls them one by one for other terrains.
+    Returns (screws tested, samples queried m, samples in contact)."""
+    ns = parent_row.shape[0]
+    if broad_phase:
+        screw_centres(poses, parent_row, mount_p, R, centres)
+        n_active = plane_active(centres, sphere_r, origin, n, active)
+    else:
+        for s in range(ns):
+            active[s] = s
+        n_active = ns
+    m = 0
+    if n_active:
+        m = sample_points(poses, active, n_active, start, points_B, parent_row, R, points, sample, owner)
+        plane_query(m, points, origin, n, distance, normal, material)
+        for i in range(m):
+            material[i] = region_material
+    n_contact = contact_wrenches(m, distance, normal, material, sample, owner, poses, vels, joint_v, ringc_B,
+                                 radial_B, axis_B, parent_row, screw_row, radius, lead_angle, hand, spin_dof,
+                                 spin_mult, mats, v_eps, mode, ev_floor, R, out_point, out_vel, out_force, out_fn,
+                                 out_wrench, out_screw_fn)
+    return n_active, m, n_contact

@@ -51,8 +51,8 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from snakesim.framework import Component, ContinuousState, Input, Output
 
-from .robot_source import (JOINT_KINDS, RobotParams, continuous_mask, effort_limits, joint_kind, joint_names,
-                           per_joint, wrap_angle)
+from .pid_kernel import pid_law
+from .robot_source import JOINT_KINDS, RobotParams, continuous_mask, effort_limits, joint_kind, joint_names, per_joint
 
 Mode = Literal["position", "velocity", "off"]
 
@@ -133,6 +133,7 @@ class JointPid(Component[JointPidParams]):
         if self._discrete:
             T = self._T = 1.0 / self.rate
             self._a = T / (self._tf + T)
+            self._inv_tf = np.zeros(self._nj)           # the discrete law has no 1/tf
         else:
             bad = [n for n, v, kd, tf in zip(names, self._vel, self._kd, self._tf) if v and kd > 0 and tf == 0]
             if bad:
@@ -140,6 +141,11 @@ class JointPid(Component[JointPidParams]):
                                  "form needs a filter time constant tf > 0 to differentiate the rate error "
                                  "(or give the component a rate for the discrete form)")
             self._inv_tf = np.where(self._tf > 0, 1.0 / np.where(self._tf > 0, self._tf, 1.0), 0.0)
+            self._T, self._a = 0.0, np.zeros(self._nj)  # the continuous law has no sample period
+        n = self._nj
+        # the law's per-joint results (pid_kernel.pid_law), reused by output/derivative/update
+        self._tau, self._e, self._dint, self._zrate = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n)
+        self._call = None
 
     def continuous_state(self):
         if self._discrete:
@@ -153,56 +159,33 @@ class JointPid(Component[JointPidParams]):
             return None
         return np.zeros(2 * self._nj + 1)       # [I, z, started]
 
-    # -- the law --------------------------------------------------------------------------
-    def _errors(self, u):
-        pos = self._pos
-        e = np.where(pos, u.setpoint - u.q, u.setpoint - u.v)
-        if self._cont.any():
-            e = np.where(self._cont, wrap_angle(e), e)
-        r = u.rate_ref - u.v
-        return e, r
-
-    def _derivative_term(self, x, e, r):
-        n = self._nj
-        z = x[n:2 * n]
-        if self._discrete:
-            if x[2 * n] == 0.0:                   # first tick: the filter starts at its input
-                z = np.where(self._pos, r, e)
-            d_pos = (1.0 - self._a) * z + self._a * r
-            d_vel = (e - z) / (self._tf + self._T)
-        else:
-            d_pos = np.where(self._tf > 0, z, r)
-            d_vel = (e - z) * self._inv_tf
-        return np.where(self._pos, d_pos, d_vel), z
-
+    # -- the law (pid_kernel.pid_law: one numba call per evaluation) ---------------------------
     def _law(self, x, u):
-        e, r = self._errors(u)
-        d, z = self._derivative_term(x, e, r)
-        raw = self._kp * e + self._ki * x[:self._nj] + self._kd * d + u.tau_ff
-        tau = np.clip(raw, -self._tmax, self._tmax)
-        return tau, raw, e, r, d, z
-
-    def _integrating(self, raw, tau, e):
-        if not self._clamp:
-            return np.ones_like(e, dtype=bool)
-        return ~((raw != tau) & (e * raw > 0))
+        # the argument tuple is built once per (state, inputs) pair: the plan hands the same objects
+        # every call and an input namespace's arrays cannot be rebound (held, so ids stay unique)
+        c = self._call
+        if c is None or c[0] is not x or c[1] is not u:
+            c = self._call = (x, u, (self._pos, self._cont, self._kp, self._ki, self._kd, self._tf, self._tmax,
+                                     self._inv_tf, self._a, self._T, self._discrete, self._clamp, u.setpoint,
+                                     u.rate_ref, u.tau_ff, u.q, u.v, x, self._tau, self._e, self._dint, self._zrate))
+        pid_law(*c[2])
 
     def output(self, t, x, u, y):
-        tau, _, e, _, _, _ = self._law(x, u)
-        y.tau[:] = tau
-        y.error[:] = e
+        self._law(x, u)
+        y.tau[:] = self._tau
+        y.error[:] = self._e
 
     def derivative(self, t, x, u, dx):
         n = self._nj
-        tau, raw, e, r, _, z = self._law(x, u)
-        dx[:n] = np.where(self._integrating(raw, tau, e), e, 0.0)
-        dx[n:] = np.where(self._pos, r - z, e - z) * self._inv_tf
+        self._law(x, u)
+        dx[:n] = self._dint
+        dx[n:] = self._zrate
 
     def update(self, t, xd, u):
         n = self._nj
-        tau, raw, e, r, d, z = self._law(xd, u)
-        xd[:n] += self._T * np.where(self._integrating(raw, tau, e), e, 0.0)
-        xd[n:2 * n] = np.where(self._pos, d, z + self._T * d)
+        self._law(xd, u)
+        xd[:n] += self._T * self._dint
+        xd[n:2 * n] = self._zrate
         xd[2 * n] = 1.0
 
     # -- introspection ------------------------------------------------------------------------

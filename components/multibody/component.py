@@ -125,9 +125,11 @@ class Multibody(Component[MultibodyParams]):
                             names=_names(tuple(f"r{i}{j}" for i in range(3) for j in range(3))))
     link_velocities = Output(shape=lambda p: (_lay(p).nl, 6), unit=None, feedthrough=(), calc="calc_state",
                              names=_names(SIX))
-    momentum = Output(shape=(6,), unit=None, feedthrough=(), calc="calc_state",
+    # their own group: read by recorders and stop conditions, not by the derivatives' inputs, so
+    # integrator stages (the continuous closure) skip them
+    momentum = Output(shape=(6,), unit=None, feedthrough=(), calc="calc_momentum",
                       names=("px", "py", "pz", "lx", "ly", "lz"))
-    com = Output(shape=(3,), unit="m", feedthrough=(), calc="calc_state", names=("x", "y", "z"))
+    com = Output(shape=(3,), unit="m", feedthrough=(), calc="calc_momentum", names=("x", "y", "z"))
     energy = Output(shape=(2,), unit="J", feedthrough=("gravity",), calc="calc_energy", names=("kinetic", "potential"))
     a = Output(shape=lambda p: (_lay(p).nv,), unit=None, feedthrough=True, names=lambda p: tuple(_lay(p).v_names))
     link_accelerations = Output(shape=lambda p: (_lay(p).nl, 6), unit=None, feedthrough=True,
@@ -180,12 +182,17 @@ class Multibody(Component[MultibodyParams]):
         self._S = np.zeros((nl, 6))
         self._T = np.zeros(nv)
         self._qdd = np.zeros(nv)
-        self._kin_x = np.full(nq + nv, np.nan)
+        self._kin_key = None   # x.tobytes() of the state the kinematics buffers hold
         self._g = np.array(p.gravity, dtype=float)
         self._g_param = self._g.copy()
         self._scale_mode = p.gravity_input == "scale"
         self._set_gravity(self._g)
-        self._pending = None   # (x, tau, W, g) the last output() solved for
+        self._g_key = None     # the gravity input the model's gravity was last set from
+        self._pending = None   # byte keys of (x, tau, W, g) the last output() solved for
+        self._energy_scratch = np.zeros(2)
+        self._state_call = self._force_call = None     # kernel argument tuples, see _state_args
+        self._aba = self._pin.aba if self.mode != "mimic_crba" else None
+        self.bind_outputs(self.used_outputs)
         self._report = None
         self._x0 = lay.initial_state(p, model)       # validated here, so errors name the component
 
@@ -212,12 +219,24 @@ class Multibody(Component[MultibodyParams]):
         """
         k[:6] = np.linalg.solve(self._pin.Jexp6(np.ascontiguousarray(u[:6])), k[:6])
 
+    def bind_outputs(self, used):
+        """Unread outputs cost nothing: the accelerations group and the optional state outputs are skipped."""
+        super().bind_outputs(used)
+        self._want_qv = bool(used & {"q", "v"})
+        self._want_rot = "link_rotations" in used
+        self._want_acc = bool(used & {"a", "link_accelerations", "cut_wrenches"})
+
     # -- hot path -----------------------------------------------------------------------
+    # Caches are keyed by the bytes of their inputs (cheaper than np.array_equal, and exact):
+    # the state-output node and the derivative see the same x within one evaluation.
     def _set_gravity(self, g):
         self._g[:] = g
         self.dyn.model.gravity.linear[:] = g
 
     def _gravity_of(self, gin) -> np.ndarray:
+        key = gin.tobytes()
+        if key == self._g_key:
+            return self._g
         if self._scale_mode:
             s = gin[0]
             g = self._g_param if s != s else s * self._g_param
@@ -225,65 +244,83 @@ class Multibody(Component[MultibodyParams]):
             g = self._g_param if np.isnan(gin).any() else gin
         if not np.array_equal(g, self._g):
             self._set_gravity(g)
+        self._g_key = key
         return self._g
 
     def _kinematics(self, x):
-        if np.array_equal(x, self._kin_x):
+        key = x.tobytes()
+        if key == self._kin_key:
             return
         t = self._ta
         self._k.forward_kinematics(t.order, t.parent, t.jtype, t.R0, t.p0, t.axis, t.qidx, t.qkind, t.vidx,
                                    t.mult, t.offset, x[:self._nq], x[self._nq:],
                                    self._R, self._p, self._w, self._vo, self._aw, self._thd)
-        self._kin_x[:] = x
+        self._kin_key = key
+
+    # Kernel argument tuples, built once per caller: the plan hands the same state view and
+    # port namespaces every call (a namespace's arrays cannot be rebound), so a call costs two
+    # identity tests instead of some thirty attribute look-ups. Held references keep ids unique.
+    def _state_args(self, x, y):
+        c = self._state_call
+        if c is None or c[0] is not x or c[1] is not y:
+            t_, q, v = self._ta, x[:self._nq], x[self._nq:]
+            args = (t_.order, t_.parent, t_.jtype, t_.R0, t_.p0, t_.axis, t_.qidx, t_.qkind, t_.vidx, t_.mult,
+                    t_.offset, q, v, self._R, self._p, self._w, self._vo, self._aw, self._thd,
+                    self._jq_idx, self._jq_cs, self._dof_v, y.joint_q, y.joint_v, y.link_poses, y.link_velocities)
+            c = self._state_call = (x, y, args)
+        return c[2]
+
+    def _force_args(self, x, u):
+        c = self._force_call
+        if c is None or c[0] is not x or c[1] is not u:
+            t_, q, v = self._ta, x[:self._nq], x[self._nq:]
+            args = (self._dof_v, u.tau, self._damp, v, t_.order, t_.parent, t_.jtype, t_.vidx, t_.mult,
+                    self._R, self._p, self._aw, u.wrenches, self._S, self._T)
+            c = self._force_call = (x, u, args, q, v)
+        return c
 
     def _solve(self, x, u) -> np.ndarray:
         """Generalised accelerations at (x, inputs) into self._qdd."""
-        nq = self._nq
-        q, v = x[:nq], x[nq:]
+        _, _, args, q, v = self._force_args(x, u)
         self._gravity_of(u.gravity)
-        T = self._T
-        T.fill(0.0)
-        T[self._dof_v] = u.tau - self._damp * v[self._dof_v]
-        W = u.wrenches
-        if W.any():
+        loaded = u.wrenches.any()
+        if loaded:
             self._kinematics(x)
-            t = self._ta
-            self._k.generalized_forces(t.order, t.parent, t.jtype, t.vidx, t.mult, self._R, self._p, self._aw,
-                                       W, self._S, T)
-        self._qdd[:] = self.dyn.forward(q, v, T)
+        self._k.joint_forces(loaded, *args)
+        self._qdd[:] = self._aba(self.dyn.model, self.dyn.data, q, v, self._T) if self._aba is not None \
+            else self.dyn.forward(q, v, self._T)
         return self._qdd
+
+    def _inputs_key(self, x, u):
+        return x.tobytes(), u.tau.tobytes(), u.wrenches.tobytes(), u.gravity.tobytes()
 
     def derivative(self, t, x, u, dx):
         nv = self._nv
         dx[:nv] = x[self._nq:]
-        pend, self._pending = self._pending, None
-        if pend is not None and np.array_equal(pend[0], x) and np.array_equal(pend[1], u.tau) \
-                and np.array_equal(pend[2], u.wrenches) and np.array_equal(pend[3], u.gravity, equal_nan=True):
-            dx[nv:] = self._qdd
-            return
+        if self._pending is not None:
+            pend, self._pending = self._pending, None
+            if pend == self._inputs_key(x, u):
+                dx[nv:] = self._qdd
+                return
         dx[nv:] = self._solve(x, u)
 
     # -- outputs ---------------------------------------------------------------------------
     def calc_state(self, t, x, u, y):
         nq = self._nq
-        y.q[:] = x[:nq]
-        y.v[:] = x[nq:]
-        q = x[:nq]
-        ang = q[self._jq_idx]
-        cs = self._jq_cs
-        if cs.any():
-            ang[cs] = np.arctan2(q[self._jq_idx[cs] + 1], q[self._jq_idx[cs]])
-        y.joint_q[:] = ang
-        y.joint_v[:] = x[nq:][self._dof_v]
+        q, v = x[:nq], x[nq:]
+        if self._want_qv:
+            y.q[:] = q
+            y.v[:] = v
+        self._k.state_outputs(*self._state_args(x, y))
+        self._kin_key = x.tobytes()
+        if self._want_rot:
+            y.link_rotations[:] = self._R
+
+    def calc_momentum(self, t, x, u, y):
         self._kinematics(x)
-        k = self._k
-        k.poses(self._R, self._p, y.link_poses)
-        y.link_rotations[:] = self._R
-        y.link_velocities[:, :3] = self._vo
-        y.link_velocities[:, 3:] = self._w
         t_ = self._ta
-        k.momentum_energy(self._R, self._p, self._w, self._vo, t_.mass, t_.com, t_.inertia, self._g_param,
-                          y.momentum, y.com, np.zeros(2))
+        self._k.momentum_energy(self._R, self._p, self._w, self._vo, t_.mass, t_.com, t_.inertia, self._g_param,
+                                y.momentum, y.com, self._energy_scratch)
 
     def calc_energy(self, t, x, u, y):
         g = self._gravity_of(u.gravity)
@@ -295,9 +332,10 @@ class Multibody(Component[MultibodyParams]):
         y.energy[0] += 0.5 * float(self._arm_v @ (v * v))
 
     def output(self, t, x, u, y):
+        if not self._want_acc:
+            return      # nobody reads a, link_accelerations or cut_wrenches: derivative() solves alone
         qdd = self._solve(x, u)
-        self._pending = (x.copy(), np.array(u.tau, copy=True), np.array(u.wrenches, copy=True),
-                         np.array(u.gravity, copy=True))
+        self._pending = self._inputs_key(x, u)
         y.a[:] = qdd
         self._kinematics(x)
         t_ = self._ta

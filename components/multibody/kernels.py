@@ -303,3 +303,34 @@ def poses(R, p, out):
         n = np.sqrt(qx * qx + qy * qy + qz * qz + qw * qw)
         out[l, 0], out[l, 1], out[l, 2] = p[l, 0], p[l, 1], p[l, 2]
         out[l, 3], out[l, 4], out[l, 5], out[l, 6] = qx / n, qy / n, qz / n, qw / n
+
+
+@njit(cache=True)
+def state_outputs(order, parent, jtype, R0, p0, axis, qidx, qkind, vidx, mult, offset, q, v,
+                  R, p, w, vo, aw, thd, jq_idx, jq_cs, dof_v, joint_q, joint_v, link_poses, link_velocities):
+    """forward_kinematics, then the state outputs in one call (one dispatch per evaluation):
+    joint_q (continuous joints' (cos, sin) as an angle in (-π, π]), joint_v, link_poses,
+    link_velocities [v origin, ω]."""
+    forward_kinematics(order, parent, jtype, R0, p0, axis, qidx, qkind, vidx, mult, offset, q, v,
+                       R, p, w, vo, aw, thd)
+    for j in range(jq_idx.size):
+        i = jq_idx[j]
+        joint_q[j] = np.arctan2(q[i + 1], q[i]) if jq_cs[j] else q[i]
+        joint_v[j] = v[dof_v[j]]
+    poses(R, p, link_poses)
+    for l in range(R.shape[0]):
+        for i in range(3):
+            link_velocities[l, i] = vo[l, i]
+            link_velocities[l, 3 + i] = w[l, i]
+
+
+@njit(cache=True)
+def joint_forces(with_wrenches, dof_v, tau, damping, v, order, parent, jtype, vidx, mult, R, p, aw, W, S, T):
+    """Generalised force T[nv]: τ − damping·v on the DOF joints, plus Σ J_lᵀ W_l when
+    ``with_wrenches`` (generalized_forces; needs the kinematics of this state in R, p, aw)."""
+    for i in range(T.size):
+        T[i] = 0.0
+    for j in range(dof_v.size):
+        T[dof_v[j]] = tau[j] - damping[j] * v[dof_v[j]]
+    if with_wrenches:
+        generalized_forces(order, parent, jtype, vidx, mult, R, p, aw, W, S, T)

@@ -23,10 +23,13 @@ class SemiImplicitEuler(FixedStep):
     def _alloc(self, nx, ndx):
         self.dxh = np.zeros(ndx)
         self.pairs = self.sys.second_order_pairs()
+        # views into dxh, made once: the position rows and a scratch of their size
+        self._pos_views = [(self.dxh[pos], vel, np.zeros(pos.stop - pos.start)) for pos, vel in self.pairs]
 
     def step(self, t, h, k1):
         np.multiply(k1, h, out=self.dxh)
         hh = h * h
-        for pos, vel in self.pairs:
-            self.dxh[pos] += hh * k1[vel]
+        for dpos, vel, tmp in self._pos_views:
+            np.multiply(k1[vel], hh, out=tmp)
+            dpos += tmp
         self.sys.integrate(self.sys.X, self.dxh, self.sys.X)

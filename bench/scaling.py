@@ -1,0 +1,88 @@
+"""Real-time factor of the default scene against module count.
+
+assemblies/surface-screw-traverse.yaml (EELS 1.0 on flat ice, joint PIDs, screw
+schedule, SDF screw contact) with ``robot.modules`` = 4, 10, 30, 100, each run for
+``--duration`` simulated seconds at the given integrator and step, after a warm-up run
+(numba caches, first touch). Reports wall time per simulated second, the real-time
+factor (sim time / wall time; > 1 is faster than real time), µs per step, the build
+time, and whether the run completed.
+
+    .venv/bin/python bench/scaling.py [--modules 4,10,30,100] [--integrator semi_implicit_euler]
+                                      [--dt 0.002] [--duration 2] [--repeats 2] [--json FILE]
+
+Targets (issue 6): ≥ 10x real time at 10 modules, ≥ 1.5x at 100 modules. Reference
+figures from the issue: MuJoCo ~17-25x at 10 modules but 0.17x at 100; a hand-written
+Pinocchio + numpy loop ~8x at 10 and 1.7x at 100. At 100 modules Pinocchio 4.1's Data
+takes ~2 GB and a few seconds to build (components/multibody/component.py).
+"""
+
+from __future__ import annotations
+
+import os
+
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import gc  # noqa: E402
+import json  # noqa: E402
+import platform  # noqa: E402
+import time  # noqa: E402
+
+import click  # noqa: E402
+
+from snakesim.framework.session import load_session  # noqa: E402
+
+SCENE = "surface-screw-traverse"
+TARGETS = {10: 10.0, 100: 1.5}
+
+
+def scene_row(modules: int, integrator: str, dt: float, duration: float, repeats: int) -> dict:
+    t0 = time.perf_counter()
+    s = load_session(SCENE, overrides=[f"robot.modules={modules}"],
+                     sim_overrides={"duration": duration, "integrator": integrator, "dt": dt})
+    build = time.perf_counter() - t0
+    s.run()         # warm-up
+    best = None
+    for _ in range(repeats):
+        gc.collect()
+        gc.disable()
+        r = s.run()
+        gc.enable()
+        if best is None or r.summary["wall_time_s"] < best["wall_time_s"]:
+            best = r.summary
+    nv = s.plan.components["robot"].dyn.model.nv
+    del s
+    gc.collect()
+    return {"modules": modules, "nv": nv, "integrator": integrator, "dt_s": dt, "sim_time_s": best["sim_time_s"],
+            "wall_time_s": best["wall_time_s"], "real_time_factor": best["real_time_factor"],
+            "us_per_step": best["wall_time_s"] / max(1, best["steps"]) * 1e6, "build_s": build,
+            "completed": best["completed"], "target_rtf": TARGETS.get(modules)}
+
+
+@click.command()
+@click.option("--modules", default="4,10,30,100", help="comma-separated module counts")
+@click.option("--integrator", default="semi_implicit_euler")
+@click.option("--dt", default=0.002, help="s, base step")
+@click.option("--duration", default=2.0, help="simulated seconds per run")
+@click.option("--repeats", default=2, help="timed runs per module count (best kept)")
+@click.option("--json", "json_path", type=click.Path(dir_okay=False), help="write the figures here")
+def main(modules, integrator, dt, duration, repeats, json_path):
+    rows = [scene_row(int(m), integrator, dt, duration, repeats) for m in modules.split(",")]
+    print(f"{SCENE}, {integrator} at dt = {dt * 1e3:g} ms, {duration:g} s simulated, best of {repeats}")
+    print(f"{'modules':>7s} {'nv':>5s} {'build s':>8s} {'wall s':>8s} {'us/step':>9s} {'RTF':>7s} {'target':>7s}")
+    for r in rows:
+        tgt = f"{r['target_rtf']:g}" if r["target_rtf"] else "-"
+        flag = "" if r["completed"] else "  (did not complete)"
+        if r["target_rtf"] and r["real_time_factor"] < r["target_rtf"]:
+            flag += "  (below target)"
+        print(f"{r['modules']:7d} {r['nv']:5d} {r['build_s']:8.2f} {r['wall_time_s']:8.3f} {r['us_per_step']:9.1f} "
+              f"{r['real_time_factor']:7.2f} {tgt:>7s}{flag}")
+    if json_path:
+        with open(json_path, "w") as fh:
+            json.dump({"machine": platform.processor() or platform.machine(), "python": platform.python_version(),
+                       "scene": SCENE, "rows": rows}, fh, indent=2)
+        print(f"wrote {json_path}")
+
+
+if __name__ == "__main__":
+    main()

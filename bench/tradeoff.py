@@ -1,0 +1,191 @@
+"""Speed versus accuracy of the default scene (crescent screw traverse) and the parallel-walls scene.
+
+    .venv/bin/python bench/tradeoff.py [--quick] [--json FILE] [--plot PNG]
+
+For each setting — every integrator at several steps / tolerances, both contact back ends
+(screw_sdf_contact / hull_contact: the `type` of component `contact` swapped in the resolved
+configuration), 1/2/4/8 contact samples per screw ring (SDF back end), and the multibody
+optimisation on/off (its knob is `screw_pairs`: `embedded` = a screw pair is one DOF with the
+rear screw's inertia folded in, the optimised model; `mimic_crba` = the pair kept as a mimic
+constraint solved through the CRBA, the unoptimised path) — it runs the scene and reports:
+
+  wall s, RTF     wall time of the run and simulated / wall time
+  pos err m       max over time of |tail (x, y) − reference| (traverse) or |CoM − reference| (walls)
+  yaw err rad     max over time of |tail yaw − reference| (traverse; the fig. 14 quantities)
+  stable          no non-finite-state or integrator-failure stop (the framework's stop;
+                  never a silent NaN). A run the scene itself stops (the walls' mobility
+                  monitor) is compared up to the earlier of its end and the reference's.
+
+The reference is the same scene at rk4, dt = 0.25 ms (tests/validation/validation_scenes.py),
+cached under bench/results/. `--quick`: traverse 2 s (compressed schedule), walls 1.5 s and a
+reduced set of settings (a few minutes); full: 45 s traverse, 4 s walls, every setting.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+from pathlib import Path
+
+import click
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "validation"))
+from validation_scenes import REFERENCE, run, track_error  # noqa: E402
+
+
+def _track(result, scene):
+    """(t, [x, y, yaw]) for the traverse; (t, [CoM x, y, z]) for the walls (no yaw)."""
+    t = np.asarray(result["t"], dtype=float)
+    if "tail_pose.pose" in [f"{r.comp}.{r.port}" for r in result.log.refs]:
+        p = np.array(result["tail_pose.pose"], dtype=float)
+        p[:, 2] = np.unwrap(p[:, 2])
+        return t, p, True
+    return t, np.array(result["robot.com"], dtype=float), False
+
+
+def _errors(t, p, has_yaw, t_ref, p_ref):
+    if has_yaw:
+        return track_error(t, p, t_ref, p_ref)
+    end = min(t[-1], t_ref[-1])
+    keep = t_ref <= end + 1e-9
+    d = np.column_stack([np.interp(t_ref[keep], t, p[:, j]) for j in range(3)]) - p_ref[keep]
+    return {"pos_err_m": float(np.linalg.norm(d, axis=1).max()), "yaw_err_rad": None}
+
+
+def _patch(contact_type=None, per_ring=None, screw_pairs=None):
+    def apply(resolved):
+        c = resolved.components
+        if contact_type is not None:
+            c["contact"].type = contact_type
+            if contact_type == "hull_contact":
+                for k in ("rings", "per_ring", "phase", "v_eps", "regularisation", "ev_floor", "broad_phase", "margin"):
+                    c["contact"].params.pop(k, None)
+                # ports only the SDF back end has are not recorded
+                resolved.record[:] = [(r, w) for r, w in resolved.record if r != "contact.screw_normal_force"]
+        if per_ring is not None:
+            c["contact"].params["per_ring"] = per_ring
+        if screw_pairs is not None:
+            c["robot"].params["screw_pairs"] = screw_pairs
+    return apply
+
+
+def settings(quick: bool):
+    out = []
+    I = lambda name, dt, **p: {"label": f"{name} dt={dt:g}" + "".join(f" {k}={v:g}" for k, v in p.items()),  # noqa: E731
+                               "integrator": {"name": name, "params": p}, "dt": dt}
+    steps = {"rk4": [5e-4, 1e-3, 2e-3] if quick else [5e-4, 1e-3, 2e-3, 4e-3],
+             "semi_implicit_euler": [2.5e-4, 5e-4, 1e-3] if quick else [1e-4, 2.5e-4, 5e-4, 1e-3, 2e-3],
+             "rosenbrock2": [2e-3] if quick else [1e-3, 2e-3, 5e-3]}
+    for name, dts in steps.items():
+        for dt in dts:
+            out.append(I(name, dt, **({"jacobian_every": 10} if name == "rosenbrock2" else {})))
+    for rtol in ([1e-4, 1e-6] if quick else [1e-3, 1e-4, 1e-6, 1e-8]):
+        out.append(I("dopri5", 1e-3, rtol=rtol, atol=rtol * 1e-2))
+    base = {"integrator": {"name": "rk4", "params": {}}, "dt": 1e-3}
+    out.append({**base, "label": "rk4 dt=0.001 hull_contact", "patch": {"contact_type": "hull_contact"}})
+    for n in [1, 2, 4, 8]:
+        out.append({**base, "label": f"rk4 dt=0.001 per_ring={n}", "patch": {"per_ring": n}})
+    for sp in ["embedded", "mimic_crba"]:
+        out.append({**base, "label": f"rk4 dt=0.001 screw_pairs={sp}", "patch": {"screw_pairs": sp}})
+    return out
+
+
+SCENES = {  # scene -> (--set items, quick horizon, full horizon)
+    "surface-screw-traverse": (["settle=0.5", "phase=1.5"], 2.0, None),
+    "parallel-walls-climb": ([], 1.5, 4.0),
+}
+
+
+def measure(scene, sets, horizon, s):
+    sim = {"duration": horizon, "dt": s["dt"], "integrator": s["integrator"]}
+    try:
+        sess, r = run(scene, sets, sim, _patch(**s.get("patch", {})))
+    except Exception as e:                      # a setting the build rejects (e.g. a record rate)
+        return {"error": f"{type(e).__name__}: {e}"}
+    sm = r.summary
+    return {"result": r, "wall_s": sm["wall_time_s"], "rtf": sm["real_time_factor"], "sim_s": sm["sim_time_s"],
+            "stable": r.last_good_state is None, "stop": sm["stop_reason"]}
+
+
+@click.command()
+@click.option("--quick", is_flag=True, help="Shorter horizons, fewer settings (a few minutes).")
+@click.option("--json", "json_path", type=click.Path(dir_okay=False), help="Write the figures here.")
+@click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default="bench/results/tradeoff.png",
+              show_default=True, help="Pareto plot (PNG).")
+@click.option("--scene", "only", multiple=True, help="Only these scenes.")
+def main(quick, json_path, plot_path, only):
+    rows = []
+    for scene, (sets, qh, fh) in SCENES.items():
+        if only and scene not in only:
+            continue
+        if quick:
+            horizon = qh
+        else:
+            horizon = fh or 45.0
+            sets = [] if scene == "surface-screw-traverse" else sets
+        ref_s, ref = run(scene, sets, {"duration": horizon, "dt": REFERENCE["dt"], "integrator": REFERENCE["integrator"]})
+        t_ref, p_ref, _ = _track(ref, scene)
+        print(f"\n{scene}: {horizon:g} s; reference rk4 dt={REFERENCE['dt']:g}: {ref.summary['stop_reason']}, "
+              f"RTF {ref.summary['real_time_factor']:.3g}", flush=True)
+        print(f"| setting | wall s | RTF | pos err m | yaw err rad | stable | stop |\n|---|---:|---:|---:|---:|---|---|")
+        for s in settings(quick):
+            m = measure(scene, sets, horizon, s)
+            row = {"scene": scene, "setting": s["label"], "horizon_s": horizon}
+            if "error" in m:
+                row.update(error=m["error"], stable=False)
+                print(f"| {s['label']} | — | — | — | — | build error | {m['error'][:60]} |")
+            else:
+                t, p, yaw = _track(m.pop("result"), scene)
+                row.update(m, **_errors(t, p, yaw, t_ref, p_ref))
+                ye = "—" if row["yaw_err_rad"] is None else f"{row['yaw_err_rad']:.2e}"
+                print(f"| {s['label']} | {row['wall_s']:.2f} | {row['rtf']:.3g} | {row['pos_err_m']:.2e} | {ye} | "
+                      f"{'yes' if row['stable'] else 'NO'} | {row['stop'][:60]} |", flush=True)
+            rows.append(row)
+    if json_path:
+        Path(json_path).parent.mkdir(parents=True, exist_ok=True)
+        Path(json_path).write_text(json.dumps({"quick": quick, "reference": REFERENCE, "rows": rows}, indent=1) + "\n")
+    if plot_path:
+        plot(rows, Path(plot_path))
+        print(f"\nwrote {plot_path}")
+
+
+def pareto(points):
+    """Indices of the points no other point beats in both RTF (higher) and error (lower)."""
+    idx = []
+    for i, (r, e) in enumerate(points):
+        if not any((r2 >= r and e2 <= e) and (r2 > r or e2 < e) for j, (r2, e2) in enumerate(points) if j != i):
+            idx.append(i)
+    return idx
+
+
+def plot(rows, path):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    scenes = sorted({r["scene"] for r in rows})
+    fig, axes = plt.subplots(1, len(scenes), figsize=(6.5 * len(scenes), 5), squeeze=False)
+    for ax, scene in zip(axes[0], scenes):
+        ok = [r for r in rows if r["scene"] == scene and r.get("stable") and "pos_err_m" in r]
+        pts = [(r["rtf"], max(r["pos_err_m"], 1e-12)) for r in ok]
+        for r, (x, y) in zip(ok, pts):
+            ax.scatter(x, y, s=18)
+            ax.annotate(r["setting"], (x, y), fontsize=6, xytext=(3, 2), textcoords="offset points")
+        front = sorted((pts[i] for i in pareto(pts)), key=lambda p: p[0])
+        if front:
+            ax.plot(*zip(*front), "k--", lw=0.8, label="Pareto front")
+        ax.set_xscale("log"), ax.set_yscale("log")
+        ax.set_xlabel("real-time factor (sim s / wall s)")
+        ax.set_ylabel("max position error vs reference, m")
+        ax.set_title(f"{scene} ({ok[0]['horizon_s']:g} s)" if ok else scene)
+        ax.grid(True, which="both", lw=0.3)
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=120)
+
+
+if __name__ == "__main__":
+    main()

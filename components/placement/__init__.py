@@ -1,0 +1,17 @@
+"""Robot placement (paper 2.2.6): shape guesses fitted to joint angles, then settling into the terrain.
+
+shapes.py           the shape guesses (curves) and their world pose
+fit.py              fit_shape(): curve -> q0 + tail pose for a design
+placed_multibody.py component `placed_multibody`: the multibody with a `shape:` parameter
+settle.py           component `placement_settle`: attraction, settle test, latch, gravity on
+"""
+
+from .fit import Placement, PlacementError, fit_shape
+from .placed_multibody import PlacedMultibody
+from .settle import Settle
+from .shapes import Pose, Shape
+
+__all__ = ["PlacedMultibody", "Placement", "PlacementError", "Pose", "Settle", "Shape", "fit_shape"]
+
+#: the components this package registers (components/plugin.py BUILTIN)
+PLACEMENT = (PlacedMultibody, Settle)

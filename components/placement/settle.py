@@ -1,0 +1,230 @@
+"""Settling a placed robot into the terrain (paper 2.2.6, step 2), then holding it with gravity on.
+
+Phase 0, settling (gravity off). Each screw's contact samples (the rings the SDF
+contact back end uses, fixed in the screw's parent body) are queried against the
+terrain; the NEAREST sample of each screw (signed distance φ_s, outward normal
+n̂_s) is pulled towards the surface by a spring, and every link with mass gets a
+mass-proportional drag so the motion dies out::
+
+    f_s = −k_attract · max(φ_s, 0) · n̂_s                at the sample p_s, on the parent body
+    f_l = −ζ m_l v_l,   τ_l = −ζ m_l r_g² ω_l           at each link origin (drag)
+
+Only the nearest sample is pulled: inside a tube the far side of a ring is far
+from the wall too, and pulling it would pull towards the opposite wall. The
+joints are free (the set-points follow the measured angles, so the PID adds
+only its damping and the shape conforms to the terrain); screws are held at
+zero speed.
+
+Settled: every screw (a fraction ``min_contact_fraction`` of them) within
+``contact_band`` of the surface (φ_s ≤ band; penetration counts as contact)
+and every link origin slower than ``max_speed``, continuously for
+``quiet_time``. Then the set-points are latched at the settled angles and a
+pre-load is latched as feed-forward torque (virtual work: the joint torques
+that would press each screw's nearest point into the terrain with ``preload``
+newtons, â_k the world axis of joint k at its child origin o_k)::
+
+    τ_k = Σ_{s beyond joint k} â_k · ((p_s − o_k) × (−preload · n̂_s))
+
+where the per-screw forces are first made self-equilibrated (Σ F_s n̂_s = 0,
+Σ F_s p_s × n̂_s = 0, the least-squares nearest to ``preload`` with F_s ≥ 0):
+otherwise the joint reactions would spin the free-floating robot (the tail link
+has no contact). These squeeze the robot between opposite surfaces and are
+what presses the screws on the terrain once the springs are gone; the attraction
+is released and gravity switched on: phase 1, holding. Not settled by ``time_limit``: the run stops with the worst screw
+distance and the fastest link.
+
+Discrete state at ``rate`` (give rate = 1/dt: the drag is a damper and must
+not be held over several steps): [phase, settle_time, quiet_since,
+latched set-points (nj), latched pre-load torques (nj)] (times −1 until set). Outputs are computed at each tick from the state
+and the inputs.
+
+in   link_poses[nl, 7], link_velocities[nl, 6], joint_q[nj]    multibody outputs
+     terrain                                                   structured Terrain
+out  wrenches[nl, 6]    N, N·m attraction + drag, world axes about link origins (to wrench_sum)
+     gravity[1]         0 settling, ``gravity_scale`` holding (multibody gravity input, "scale")
+     setpoint[nj]       rad (bend/twist, position mode), rad/s (screws: 0) for joint_pid
+     tau_ff[nj]         N·m pre-load torques (0 settling) for joint_pid.tau_ff
+     phase[1]           0 settling, 1 holding
+     settle_time[1]     s, time of the latch (NaN before)
+     gap[ns]            m, each screw's nearest-sample signed distance to the terrain
+     max_speed[1]       m/s, fastest link origin
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from typing import Literal
+
+from pydantic import Field
+
+from snakesim.framework import Component, Input, Output
+
+from ..contact.robot_screws import RobotSource, screw_layout
+from ..contact.screw_samples import ScrewContactSamples
+from ..terrain.base import Terrain
+
+
+class SettleParams(RobotSource):
+    k_attract: float = Field(2000.0, gt=0, description="N/m, attraction spring per screw")
+    drag: float = Field(8.0, ge=0, description="1/s, ζ: mass-proportional drag while settling")
+    gyration: float = Field(0.1, gt=0, description="m, r_g of the angular drag")
+    contact_band: float = Field(1e-3, gt=0, description="m, a screw within this of the surface is in contact")
+    min_contact_fraction: float = Field(1.0, gt=0, le=1, description="share of screws that must be in contact")
+    max_speed: float = Field(5e-3, gt=0, description="m/s, every link origin slower than this to latch")
+    quiet_time: float = Field(0.2, ge=0, description="s, how long both conditions must hold")
+    time_limit: float = Field(10.0, gt=0, description="s, settling must finish by then or the run stops")
+    preload: float = Field(0.0, ge=0, description="N per screw: pressing force the latched feed-forward torques make")
+    screw_hold: Literal["speed", "angle"] = Field(
+        "speed", description="screw set-points: 0 rad/s (velocity-mode PID) or the latched angle (position "
+                             "mode, a brake: a velocity PI lets a screw roll down a vertical wall like a wheel)")
+    gravity_scale: float = Field(1.0, description="gravity input while holding (1: the multibody's gravity)")
+    rings: int = Field(3, ge=1, description="sample rings per screw (as screw_sdf_contact)")
+    per_ring: int = Field(12, ge=1, description="samples per ring")
+
+
+def _lay(p):
+    return screw_layout(p)
+
+
+class Settle(Component[SettleParams]):
+    type_name = "placement_settle"
+    Params = SettleParams
+
+    link_poses = Input(shape=lambda p: (_lay(p).nl, 7), unit=None)
+    link_velocities = Input(shape=lambda p: (_lay(p).nl, 6), unit=None)
+    joint_q = Input(shape=lambda p: (_lay(p).nj,), unit="rad")
+    terrain = Input(type=Terrain)
+    wrenches = Output(shape=lambda p: (_lay(p).nl, 6), unit=None, feedthrough=("link_poses", "link_velocities", "terrain"))
+    gravity = Output(shape=(1,), unit="1", feedthrough=())
+    setpoint = Output(shape=lambda p: (_lay(p).nj,), unit=None, feedthrough=("joint_q",),
+                      names=lambda p: _lay(p).joints)
+    tau_ff = Output(shape=lambda p: (_lay(p).nj,), unit="N*m", feedthrough=(), names=lambda p: _lay(p).joints)
+    phase = Output(shape=(1,), unit="1", feedthrough=())
+    settle_time = Output(shape=(1,), unit="s", feedthrough=())
+    gap = Output(shape=lambda p: (_lay(p).ns,), unit="m", feedthrough=("link_poses", "terrain"),
+                 names=lambda p: _lay(p).names)
+    max_speed = Output(shape=(1,), unit="m/s", feedthrough=("link_velocities",))
+
+    def setup(self):
+        from snakesim.components.control.robot_source import joint_kind, robot_layout
+
+        p = self.p
+        if self.rate is None:
+            raise ValueError(f"{self.name}: placement_settle has discrete state: give it a rate (Hz), "
+                             "best 1/dt (its drag is a damper)")
+        lay = self.layout = screw_layout(p)
+        tree = robot_layout(p).tree
+        samples = [ScrewContactSamples(lay.radius[s], lay.length[s], p.rings, p.per_ring, lay.lead_angle[s],
+                                       int(lay.hand[s]), lay.mount_R[s], lay.mount_p[s]) for s in range(lay.ns)]
+        self._pts_B = np.concatenate([s.points for s in samples])          # (n, 3) in the parent body
+        self._row = np.repeat(lay.parent_row, [len(s) for s in samples])   # parent link row per sample
+        self._start = np.concatenate([[0], np.cumsum([len(s) for s in samples])[:-1]])
+        self._screw_of = np.repeat(np.arange(lay.ns), [len(s) for s in samples])
+        self._mass = np.array([tree.links[tree.link_index[n]].mass for n in lay.links])
+        self._bend = np.array([joint_kind(j) == "bend" for j in lay.joints])
+        self._screw = np.array([joint_kind(j) == "screw" for j in lay.joints])
+        self._speed_screw = self._screw & (p.screw_hold == "speed")        # set-point 0 rad/s
+        self._nj, self._ns = lay.nj, lay.ns
+        # pre-load map: joint k's child row and axis (child frame), and which screws lie beyond it
+        joints = [tree.joint_by_name[j] for j in lay.joints]
+        self._jrow = np.array([lay.links.index(j.child) for j in joints])
+        self._jaxis = np.array([j.axis for j in joints], dtype=float)
+        beyond = [set(tree.subtree(j.child)) for j in joints]
+        self._distal = np.array([[lay.links[r] in b for r in lay.parent_row] for b in beyond], dtype=float)
+        self._T = 1.0 / self.rate
+        self._need = int(np.ceil(p.min_contact_fraction * lay.ns - 1e-9))
+
+    def discrete_state(self):
+        return np.concatenate([[0.0, -1.0, -1.0], np.zeros(2 * self._nj)])     # times < 0: not yet
+
+    # -- geometry --------------------------------------------------------------------------------
+    def _nearest(self, poses, terrain):
+        """Per screw: nearest sample's distance, normal, world point and parent row."""
+        from scipy.spatial.transform import Rotation
+
+        R = Rotation.from_quat(poses[self._row, 3:]).as_matrix()            # (n, 3, 3)
+        pts = np.einsum("nij,nj->ni", R, self._pts_B) + poses[self._row, :3]
+        q = terrain.query(pts)
+        # argmin of φ within each screw's block of samples
+        order = np.lexsort((q.distance, self._screw_of))
+        first = order[self._start]
+        return q.distance[first], q.normal[first], pts[first], self._row[first]
+
+    def _speed(self, vel):
+        return float(np.sqrt((vel[:, :3] ** 2).sum(axis=1)).max())
+
+    def _preload_torques(self, poses, terrain):
+        """τ_k = Σ_s [s beyond k] â_k · ((p_s − o_k) × (−F n̂_s)): the joint torques pressing each screw into the terrain."""
+        from scipy.spatial.transform import Rotation
+
+        _, n, pts, _ = self._nearest(poses, terrain)
+        # self-equilibrated magnitudes F ≥ 0 nearest to `preload`: Σ F n = 0, Σ F p × n = 0, else the
+        # free-floating robot would be spun by the joint reactions (e.g. the contact-less tail link)
+        c = pts.mean(axis=0)
+        A = np.vstack([n.T, np.cross(pts - c, n).T])                       # (6, ns)
+        from scipy.optimize import lsq_linear
+
+        w = 1e3 * max(1.0, float(np.abs(A).max()))          # equality by a heavy penalty, F ≥ 0 by bounds
+        M = np.vstack([np.eye(self._ns), w * A])
+        rhs = np.concatenate([np.full(self._ns, self.p.preload), np.zeros(6)])
+        self.preload_forces = F = lsq_linear(M, rhs, bounds=(0.0, np.inf)).x
+        f = -F[:, None] * n                                                 # (ns, 3) into the terrain
+        Rj = Rotation.from_quat(poses[self._jrow, 3:]).as_matrix()
+        axis = np.einsum("kij,kj->ki", Rj, self._jaxis)                    # (nj, 3) world
+        arm = pts[None, :, :] - poses[self._jrow, None, :3]               # (nj, ns, 3)
+        return np.einsum("ks,ksi,ki->k", self._distal, np.cross(arm, f[None]), axis)
+
+    # -- outputs and update ----------------------------------------------------------------------
+    def output(self, t, xd, u, y):
+        terrain = u.terrain
+        if terrain is None:
+            raise ValueError(f"{self.name}: input 'terrain' carries no Terrain; connect a terrain component's "
+                             "'terrain' output to it")
+        holding = xd[0] >= 1.0
+        phi, n, pts, rows = self._nearest(u.link_poses, terrain)
+        y.gap[:] = phi
+        y.max_speed[0] = self._speed(u.link_velocities)
+        y.phase[0] = xd[0]
+        y.settle_time[0] = xd[1] if xd[1] >= 0.0 else np.nan
+        W = y.wrenches
+        W[:] = 0.0
+        if holding:
+            y.gravity[0] = self.p.gravity_scale
+            y.setpoint[:] = xd[3:3 + self._nj]
+            y.tau_ff[:] = xd[3 + self._nj:]
+            return
+        y.tau_ff[:] = 0.0
+        y.gravity[0] = 0.0
+        p = self.p
+        f = -p.k_attract * np.maximum(phi, 0.0)[:, None] * n
+        arm = pts - u.link_poses[rows, :3]
+        np.add.at(W, (rows, slice(0, 3)), f)
+        np.add.at(W, (rows, slice(3, 6)), np.cross(arm, f))
+        m = self._mass[:, None]
+        W[:, :3] -= p.drag * m * u.link_velocities[:, :3]
+        W[:, 3:] -= p.drag * m * p.gyration ** 2 * u.link_velocities[:, 3:]
+        y.setpoint[:] = np.where(self._speed_screw, 0.0, u.joint_q)     # free joints: the PID only damps
+
+    def update(self, t, xd, u):
+        p = self.p
+        if xd[0] >= 1.0:
+            return
+        phi, _, _, _ = self._nearest(u.link_poses, u.terrain)
+        speed = self._speed(u.link_velocities)
+        touching = int((phi <= p.contact_band).sum())
+        quiet = touching >= self._need and speed <= p.max_speed
+        if not quiet:
+            xd[2] = -1.0
+        elif xd[2] < 0.0:
+            xd[2] = t
+        if quiet and t - xd[2] >= p.quiet_time - 1e-12:
+            xd[3:3 + self._nj] = np.where(self._speed_screw, 0.0, u.joint_q)
+            xd[3 + self._nj:] = np.where(self._screw, 0.0, self._preload_torques(u.link_poses, u.terrain))
+            xd[0], xd[1] = 1.0, t
+            return
+        if t >= p.time_limit:
+            worst = int(np.argmax(phi))
+            self.stop(f"placement did not settle within time_limit {p.time_limit:g} s: {touching}/{self._ns} "
+                      f"screws within contact_band {p.contact_band:g} m (need {self._need}; farthest "
+                      f"{self.layout.names[worst]} at {phi[worst]:.4f} m), fastest link {speed:.4f} m/s "
+                      f"(max_speed {p.max_speed:g}); raise time_limit or k_attract, or improve the shape guess")
