@@ -15,7 +15,7 @@ built scene, so both sides do the same arithmetic; the framework run records the
 signal (tail_pose.pose) and keeps the scene's stop condition. Both must end in the same
 state (checked: bit-identical, or the script says by how much they differ).
 
-    .venv/bin/python bench/handwritten_loop.py [--modules 10] [--dt 0.002] [--duration 5]
+    .venv/bin/python bench/handwritten_loop.py [--modules 10] [--dt 0.001] [--duration 5]
                                                [--repeats 3] [--json FILE]
 
 Prints wall time per simulated second, real-time factor and µs per step for both, and
@@ -157,7 +157,7 @@ def _best_interleaved(fns, repeats):
 
 @click.command()
 @click.option("--modules", default=10, help="EELS 1.0 modules")
-@click.option("--dt", default=0.002, help="s, base step (the recommended default)")
+@click.option("--dt", default=0.001, help="s, base step (the recommended default)")
 @click.option("--duration", default=5.0, help="simulated seconds per run")
 @click.option("--repeats", default=5, help="timed runs each (best kept)")
 @click.option("--json", "json_path", type=click.Path(dir_okay=False), help="write the figures here")

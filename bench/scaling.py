@@ -8,7 +8,7 @@ factor (sim time / wall time; > 1 is faster than real time), µs per step, the b
 time, and whether the run completed.
 
     .venv/bin/python bench/scaling.py [--modules 4,10,30,100] [--integrator semi_implicit_euler]
-                                      [--dt 0.002] [--duration 2] [--repeats 2] [--json FILE]
+                                      [--dt 0.001] [--duration 2] [--repeats 2] [--json FILE]
 
 Targets (issue 6): ≥ 10x real time at 10 modules, ≥ 1.5x at 100 modules. Reference
 figures from the issue: MuJoCo ~17-25x at 10 modules but 0.17x at 100; a hand-written
@@ -62,7 +62,7 @@ def scene_row(modules: int, integrator: str, dt: float, duration: float, repeats
 @click.command()
 @click.option("--modules", default="4,10,30,100", help="comma-separated module counts")
 @click.option("--integrator", default="semi_implicit_euler")
-@click.option("--dt", default=0.002, help="s, base step")
+@click.option("--dt", default=0.001, help="s, base step (the recommended default)")
 @click.option("--duration", default=2.0, help="simulated seconds per run")
 @click.option("--repeats", default=2, help="timed runs per module count (best kept)")
 @click.option("--json", "json_path", type=click.Path(dir_okay=False), help="write the figures here")

@@ -6,7 +6,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from conftest import make_harness, random_state, set_state, snake_urdf
+from snake_models import make_harness, random_state, set_state, snake_urdf
 from snakesim.components.multibody import Multibody, MultibodyModelError
 from snakesim.framework import Component, Input, Output, Params
 from snakesim.framework.errors import BuildError, ConfigError

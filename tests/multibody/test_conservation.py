@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from conftest import snake_urdf
+from snake_models import snake_urdf
 
 SCENE = """
 sim: {{duration: {duration}, dt: {dt}, integrator: {integrator}}}

@@ -12,7 +12,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from conftest import HEAD_COM, coordinate_maps, make_harness, random_state, reference_model, set_state, snake_urdf
+from snake_models import HEAD_COM, coordinate_maps, make_harness, random_state, reference_model, set_state, snake_urdf
 
 HEAD_MASS = 2.0
 

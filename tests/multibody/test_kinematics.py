@@ -12,7 +12,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from conftest import coordinate_maps, make_harness, random_state, reference_model, set_state, snake_urdf
+from snake_models import coordinate_maps, make_harness, random_state, reference_model, set_state, snake_urdf
 from snakesim.robots import load_robot
 
 CASES = {

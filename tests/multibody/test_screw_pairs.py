@@ -15,7 +15,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from conftest import coordinate_maps, make_harness, random_state, reference_model, set_state, snake_urdf
+from snake_models import coordinate_maps, make_harness, random_state, reference_model, set_state, snake_urdf
 from snakesim.components.multibody import MultibodyModelError
 from snakesim.components.multibody.model import analyse_mimic_groups, build_dynamics
 from snakesim.components.multibody.urdf import parse_urdf

@@ -1,26 +1,4 @@
-import numpy as np
-import pytest
+"""Fixtures for tests/terrain; the helpers live in surface_checks.py (a unique module name, so
+other test folders' conftest.py files cannot shadow them)."""
 
-
-@pytest.fixture(autouse=True)
-def _tmp_store(tmp_path, monkeypatch):
-    """Every test gets its own terrain store (never the user's ~/.cache)."""
-    monkeypatch.setenv("SNAKESIM_TERRAIN_STORE", str(tmp_path / "store"))
-
-
-def fd_gradient(f, p, eps=1e-6):
-    """Central finite-difference gradient of a scalar field f((n,3)) -> (n,)."""
-    g = np.empty_like(p)
-    for a in range(3):
-        e = np.zeros(3)
-        e[a] = eps
-        g[:, a] = (f(p + e) - f(p - e)) / (2 * eps)
-    return g
-
-
-def onto_surface(terrain, p, iters=6):
-    """Move points onto the surface by repeated p <- p - d n."""
-    for _ in range(iters):
-        q = terrain.query(p)
-        p = p - q.distance[:, None] * q.normal
-    return p
+from surface_checks import *  # noqa: F401,F403  (fixtures are found in this module)

@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from conftest import fd_gradient, onto_surface
+from surface_checks import fd_gradient, onto_surface
 from PIL import Image
 
 from snakesim.components.terrain import HeightField, build_terrain, load_terrain

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 import trimesh
-from conftest import fd_gradient
+from surface_checks import fd_gradient
 
 from snakesim.components.terrain import load_terrain, mesh_terrain
 from snakesim.components.terrain import mesh as mesh_mod

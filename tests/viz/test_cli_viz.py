@@ -2,7 +2,7 @@
 
 import pytest
 
-from conftest import SCENE
+from viz_scenes import SCENE
 
 SHORT = ["--set", "robot.modules=2", "--duration", "0.05", "--quiet"]
 

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from conftest import SCENE
+from viz_scenes import SCENE
 
 from snakesim.components.viz import entities as E
 from snakesim.components.viz.attach import viewer_period

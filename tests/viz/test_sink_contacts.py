@@ -4,7 +4,7 @@ import dataclasses
 
 import numpy as np
 
-from conftest import SCENE
+from viz_scenes import SCENE
 
 from snakesim.components.viz import entities as E
 from snakesim.components.viz.attach import attach_viewer

@@ -1,0 +1,108 @@
+"""The validation report: every analytic / physics check of the project in one table, plus the
+45 s crescent traverse against its tight reference (the fig. 14 quantities).
+
+    .venv/bin/python bench/validation_report.py [--no-traverse] [--json FILE]
+
+Part 1 runs pytest on the checks listed in CHECKS (each test module is one group: its
+docstrings say which closed form, conservation law or model prediction it compares with) and
+prints one row per test with its outcome. Nothing is re-implemented here: the tests are the
+checks. Part 2 runs the default scene for its full 45 s at a few settings and prints, for each,
+the max tail x, y and yaw error against the reference (rk4, dt = 0.25 ms, cached in
+bench/results/), with the paper's model-vs-hardware error for scale (4 cm, 0.06 rad).
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import tempfile
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import click
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests" / "validation"))
+from validation_scenes import REFERENCE, TRAVERSE, reference_track, run, tail_track  # noqa: E402
+
+CHECKS = {  # test module -> what it checks against
+    "tests/framework/test_integrators.py": "integrator order and exact solutions",
+    "tests/multibody/test_conservation.py": "momentum / energy conservation of the multibody",
+    "tests/multibody/test_screw_pairs.py": "screw-pair models (embedded vs mimic) agree",
+    "tests/contact/test_steady_state.py": "screw steady axial speed, closed form",
+    "tests/contact/test_screw_sdf_scenes.py": "whole stack: u*, friction-angle creep and slide",
+    "tests/terrain/test_analytic.py": "terrain signed distances against geometry",
+    "tests/tethers/test_tethers.py": "tether statics and rope behaviour",
+    "tests/control/test_pid.py": "PID closed-loop responses",
+    "tests/monitors/test_mobility.py": "mobility monitor tilt and metrics",
+    "tests/validation/test_traverse.py": "default scene: motion direction per screw combination, reference error",
+    "tests/validation/test_scenes.py": "scenes: dangling tension = weight, climb failure stop, support",
+}
+
+
+def run_checks() -> list[dict]:
+    present = [p for p in CHECKS if (ROOT / p).exists()]
+    with tempfile.TemporaryDirectory() as d:
+        xml = Path(d) / "junit.xml"
+        subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "--continue-on-collection-errors",
+                        f"--junitxml={xml}", *present],
+                       cwd=ROOT, capture_output=True, text=True)
+        rows = []
+        for case in ET.parse(xml).getroot().iter("testcase"):
+            outcome = "passed"
+            for tag in ("failure", "error", "skipped"):
+                if case.find(tag) is not None:
+                    outcome = tag
+            cls = case.get("classname", "").replace(".", "/")
+            file = next((p for p in present if cls.startswith(p[:-3])), cls)
+            rows.append({"file": file, "test": case.get("name"), "outcome": outcome, "time_s": float(case.get("time", 0))})
+    return rows
+
+
+TRAVERSE_SETTINGS = [("rk4", 1e-3, {}), ("rk4", 2e-3, {}), ("semi_implicit_euler", 5e-4, {}),
+                     ("semi_implicit_euler", 1e-3, {}), ("dopri5", 1e-3, {"rtol": 1e-4, "atol": 1e-6})]
+
+
+def traverse_rows() -> list[dict]:
+    t_ref, ref = reference_track(45.0)
+    rows = []
+    for name, dt, p in TRAVERSE_SETTINGS:
+        _, r = run(TRAVERSE, [], {"duration": 45.0, "dt": dt, "integrator": {"name": name, "params": p}})
+        t, pose = tail_track(r)
+        n = min(len(t), len(t_ref))
+        d = pose[:n] - ref[:n]               # both recorded at the scene's 50 Hz
+        rows.append({"setting": f"{name} dt={dt:g}" + "".join(f" {k}={v:g}" for k, v in p.items()),
+                     "x_err_m": float(np.abs(d[:, 0]).max()), "y_err_m": float(np.abs(d[:, 1]).max()),
+                     "yaw_err_rad": float(np.abs(d[:, 2]).max()), "rtf": r.summary["real_time_factor"],
+                     "stop": r.summary["stop_reason"]})
+    return rows
+
+
+@click.command()
+@click.option("--no-traverse", is_flag=True, help="Skip the 45 s traverse comparison.")
+@click.option("--json", "json_path", type=click.Path(dir_okay=False))
+def main(no_traverse, json_path):
+    rows = run_checks()
+    print("| check | test | outcome | s |\n|---|---|---|---:|")
+    for r in rows:
+        print(f"| {CHECKS.get(r['file'], r['file'])} | {r['test']} | {r['outcome']} | {r['time_s']:.2f} |")
+    bad = [r for r in rows if r["outcome"] in ("failure", "error")]
+    print(f"\n{len(rows) - len(bad)} of {len(rows)} checks pass" + (f"; FAILING: {[r['test'] for r in bad]}" if bad else ""))
+    out = {"checks": rows}
+    if not no_traverse:
+        print(f"\n45 s crescent traverse against the reference ({REFERENCE['integrator']}, dt = {REFERENCE['dt']:g} s); "
+              "paper 4.2, model vs hardware: 0.04 m, 0.06 rad\n")
+        print("| setting | max tail x err m | max tail y err m | max yaw err rad | RTF | stop |\n|---|---:|---:|---:|---:|---|")
+        tr = traverse_rows()
+        for r in tr:
+            print(f"| {r['setting']} | {r['x_err_m']:.2e} | {r['y_err_m']:.2e} | {r['yaw_err_rad']:.2e} | {r['rtf']:.3g} | {r['stop']} |")
+        out["traverse"] = tr
+    if json_path:
+        Path(json_path).write_text(json.dumps(out, indent=1) + "\n")
+    sys.exit(1 if bad else 0)
+
+
+if __name__ == "__main__":
+    main()
