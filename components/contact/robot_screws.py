@@ -34,25 +34,14 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass
 from types import SimpleNamespace
-from typing import Any
 
 import numpy as np
-from pydantic import Field
 
-from snakesim.framework import Params
+
+from snakesim.components.multibody.robot_source import RobotSource  # noqa: F401  (re-exported)
 
 HANDS = {"right": 1, "left": -1}
 _CACHE: dict[str, "ScrewLayout"] = {}
-
-
-class RobotSource(Params):
-    """The robot-source parameters of the multibody (same names, same meaning)."""
-
-    urdf: str | None = Field(None, description="user URDF path of the design (or URDF text without a design)")
-    design: str | None = Field(None, description="snakesim.robots design, e.g. eels-1.0")
-    modules: int | None = Field(None, ge=1, description="module count for a design")
-    head: bool | None = Field(None, description="head on/off for a design")
-    robot: dict[str, Any] = Field(default_factory=dict, description="generator parameters (hand, lead_angle, ...)")
 
 
 class RobotScrewError(ValueError):

@@ -25,10 +25,10 @@ from pydantic import Field
 
 from snakesim.framework import Component, Output
 
-from .robot_source import RobotParams, finite_or_raise, joint_kind, joint_names, match, per_joint
+from .robot_source import RobotSource, finite_or_raise, joint_kind, joint_names, match, per_joint
 
 
-class JointSetpointsParams(RobotParams):
+class JointSetpointsParams(RobotSource):
     screw_speed: float = Field(0.0, description="rad/s, every screw joint")
     screw_direction: dict[str, float] = Field(default_factory=dict,
                                               description="multiplier (e.g. -1) by screw joint name/pattern")

@@ -52,7 +52,7 @@ from pydantic import BaseModel, ConfigDict, Field
 from snakesim.framework import Component, ContinuousState, Input, Output
 
 from .pid_kernel import pid_law
-from .robot_source import JOINT_KINDS, RobotParams, continuous_mask, effort_limits, joint_kind, joint_names, per_joint
+from .robot_source import JOINT_KINDS, RobotSource, continuous_mask, effort_limits, joint_kind, joint_names, per_joint
 
 Mode = Literal["position", "velocity", "off"]
 
@@ -77,7 +77,7 @@ class JointGains(BaseModel):
     tau_max: float | None = Field(None, gt=0, description="N·m, symmetric torque limit")
 
 
-class JointPidParams(RobotParams):
+class JointPidParams(RobotSource):
     gains: dict[str, JointGains] = Field(default_factory=dict, description="by joint name or glob pattern")
     kind_gains: dict[str, JointGains] = Field(default_factory=dict,
                                               description="per joint kind (bend, twist, screw, other)")

@@ -1,7 +1,7 @@
 """The robot a controller, sensor or monitor serves: the same source keys the multibody takes.
 
 Every robot-facing component here (PID, gaits, FTS, IMU, tethers, monitors)
-subclasses :class:`RobotParams`, so an assembly passes the robot once as
+subclasses :class:`RobotSource`, so an assembly passes the robot once as
 parameters and repeats them::
 
     parameters: {design: eels-1.5, modules: 4}
@@ -28,21 +28,10 @@ from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
-from pydantic import Field
 
-from snakesim.framework import Params
+from snakesim.components.multibody.robot_source import RobotSource  # noqa: F401  (re-exported)
 
 JOINT_KINDS = ("bend", "twist", "screw", "other")
-
-
-class RobotParams(Params):
-    """The robot source, exactly as :class:`~snakesim.components.multibody.component.Multibody` takes it."""
-
-    urdf: str | None = Field(None, description="URDF text or path (as the multibody's)")
-    design: str | None = Field(None, description="snakesim.robots design, e.g. eels-1.5 (as the multibody's)")
-    modules: int | None = Field(None, ge=1, description="module count for a design")
-    head: bool | None = Field(None, description="head on/off for a design")
-    robot: dict[str, Any] = Field(default_factory=dict, description="generator parameters (hand, lead_angle, ...)")
 
 
 def robot_layout(p, fts_cuts: list[str] | tuple[str, ...] = ()):

@@ -27,13 +27,13 @@ from pydantic import Field, model_validator
 
 from snakesim.framework import Component, Output
 
-from .robot_source import RobotParams, finite_or_raise, joint_kind, joint_names, per_joint
+from .robot_source import RobotSource, finite_or_raise, joint_kind, joint_names, per_joint
 
 GROUPS = ("all", "tail_half", "head_half")
 _MODULE = re.compile(r"_(\d+)$")
 
 
-class ScrewScheduleParams(RobotParams):
+class ScrewScheduleParams(RobotSource):
     times: list[float] = Field(default_factory=list, description="s, start of each phase, strictly increasing")
     speeds: list[dict[str, float]] = Field(default_factory=list,
                                            description="rad/s per phase, by screw name/pattern or group")

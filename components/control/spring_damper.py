@@ -17,10 +17,10 @@ from pydantic import Field
 
 from snakesim.framework import Component, Input, Output
 
-from .robot_source import RobotParams, continuous_mask, finite_or_raise, joint_names, per_joint, wrap_angle
+from .robot_source import RobotSource, continuous_mask, finite_or_raise, joint_names, per_joint, wrap_angle
 
 
-class SpringDamperParams(RobotParams):
+class SpringDamperParams(RobotSource):
     stiffness: dict[str, float] = Field(default_factory=dict, description="N·m/rad by joint name or pattern")
     damping: dict[str, float] = Field(default_factory=dict, description="N·m·s/rad by joint name or pattern")
     rest: dict[str, float] = Field(default_factory=dict, description="rest angle q0, rad, by joint name or pattern")

@@ -29,12 +29,12 @@ from pydantic import Field
 
 from snakesim.framework import Component, Output
 
-from .robot_source import RobotParams, finite_or_raise, joint_names, per_joint
+from .robot_source import RobotSource, finite_or_raise, joint_names, per_joint
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
 
 
-class CsvTrajectoryParams(RobotParams):
+class CsvTrajectoryParams(RobotSource):
     file: str = Field(..., description="CSV path: header time,<joint names>; one row per knot")
     interpolation: Literal["linear", "cubic"] = "linear"
     default: dict[str, float] = Field(default_factory=dict, description="value of joints the file omits, by name/pattern")

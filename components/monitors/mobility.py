@@ -37,7 +37,7 @@ from typing import Literal
 import numpy as np
 from pydantic import Field
 
-from snakesim.components.control.robot_source import RobotParams, link_names, match
+from snakesim.components.control.robot_source import RobotSource, link_names, match
 
 from snakesim.framework import Component, Input, Output
 
@@ -47,7 +47,7 @@ Vec3 = tuple[float, float, float]
 STARTED, P0, CONTACT, T_CONTACT, HOLD, MAX_HOLD, MAX_CLIMB, FAILED = 0, 1, 2, 3, 4, 5, 6, 7
 
 
-class MobilityParams(RobotParams):
+class MobilityParams(RobotSource):
     tilt_links: list[str] = Field(default_factory=lambda: ["module_*"], description="links whose axis is checked")
     axis: Vec3 = Field((1.0, 0.0, 0.0), description="body axis in each link frame")
     vertical: Literal["up", "down", "line"] = "line"

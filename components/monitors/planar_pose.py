@@ -22,12 +22,12 @@ from pydantic import Field
 
 from snakesim.framework import Component, Input, Output
 
-from snakesim.components.control.robot_source import RobotParams, link_names
+from snakesim.components.control.robot_source import RobotSource, link_names
 
 Vec3 = tuple[float, float, float]
 
 
-class PlanarPoseParams(RobotParams):
+class PlanarPoseParams(RobotSource):
     link: str = Field("tail", description="link whose pose is reported")
     axis: Vec3 = Field((1.0, 0.0, 0.0), description="body axis in the link frame")
 

@@ -48,25 +48,20 @@ Cost: Pinocchio 4.1 allocates O(nv³) derivative tensors in every Data: about
 
 from __future__ import annotations
 
-from typing import Any, Literal
+from typing import Literal
 
 import numpy as np
 from pydantic import Field
 
-from snakesim.framework import Component, ContinuousState, Input, Output, Params
+from snakesim.framework import Component, ContinuousState, Input, Output
 
 from .layout import Layout, layout_of
+from .robot_source import RobotSource
 
 Vec3 = tuple[float, float, float]
 
 
-class MultibodyParams(Params):
-    # robot source: a URDF (text or path), or a snakesim.robots design (+ an optional user URDF path)
-    urdf: str | None = Field(None, description="URDF text or path")
-    design: str | None = Field(None, description="snakesim.robots design, e.g. eels-1.0")
-    modules: int | None = Field(None, ge=1, description="module count for a design")
-    head: bool | None = Field(None, description="head on/off for a design")
-    robot: dict[str, Any] = Field(default_factory=dict, description="generator parameters (hand, lead_angle, ...)")
+class MultibodyParams(RobotSource):
     # initial state
     base_position: Vec3 = (0.0, 0.0, 0.0)
     base_yaw: float = Field(0.0, description="rad about world z; ignored if base_quaternion is given")

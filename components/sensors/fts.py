@@ -30,14 +30,14 @@ from typing import Literal
 import numpy as np
 from pydantic import Field
 
-from snakesim.components.control.robot_source import RobotParams, per_joint, robot_layout
+from snakesim.components.control.robot_source import RobotSource, per_joint, robot_layout
 
 from snakesim.framework import Component, Input, Output
 
 from .noise import noise_needs_rate, white_noise
 
 
-class FtsParams(RobotParams):
+class FtsParams(RobotSource):
     fts_cuts: list[str] = Field(default_factory=lambda: ["fts_joint_*"],
                                 description="the multibody's fts_cuts: joint or link names/patterns")
     convention: Literal["parent_on_child", "child_on_parent"] = "parent_on_child"

@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 from pydantic import Field
 
-from snakesim.components.control.robot_source import RobotParams, link_names, match
+from snakesim.components.control.robot_source import RobotSource, link_names, match
 
 from snakesim.framework import Component, Input, Output
 
@@ -32,7 +32,7 @@ from .noise import noise_needs_rate, white_noise
 Vec3 = tuple[float, float, float]
 
 
-class ImuParams(RobotParams):
+class ImuParams(RobotSource):
     link: str = Field("imu", description="link (frame) the IMU is mounted on")
     offset: Vec3 = Field((0.0, 0.0, 0.0), description="m, IMU position in the link frame")
     gravity: Vec3 = Field((0.0, 0.0, -9.81), description="m/s², world (as the multibody's)")

@@ -29,7 +29,7 @@ import math
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
-from snakesim.components.control.robot_source import RobotParams, link_names
+from snakesim.components.control.robot_source import RobotSource, link_names
 
 from snakesim.framework import Component, Input, Output
 
@@ -48,7 +48,7 @@ class TetherSpec(BaseModel):
     release: float | None = Field(None, description="s, released at (None: never)")
 
 
-class TetherParams(RobotParams):
+class TetherParams(RobotSource):
     tethers: list[TetherSpec] = Field(..., min_length=1)
 
 

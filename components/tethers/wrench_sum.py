@@ -17,12 +17,12 @@ from __future__ import annotations
 import numpy as np
 from pydantic import Field
 
-from snakesim.components.control.robot_source import RobotParams, link_names
+from snakesim.components.control.robot_source import RobotSource, link_names
 
 from snakesim.framework import Component, Input, Output
 
 
-class WrenchSumParams(RobotParams):
+class WrenchSumParams(RobotSource):
     nl: int | None = Field(None, ge=1, description="number of links; default: the robot's (robot source keys)")
     signs: list[float] = Field(default_factory=lambda: [1.0, 1.0, 1.0, 1.0], min_length=1, max_length=4)
 
