@@ -18,34 +18,51 @@ zero speed.
 Settled: every screw (a fraction ``min_contact_fraction`` of them) within
 ``contact_band`` of the surface (φ_s ≤ band; penetration counts as contact)
 and every link origin slower than ``max_speed``, continuously for
-``quiet_time``. Then the set-points are latched at the settled angles and a
-pre-load is latched as feed-forward torque (virtual work: the joint torques
-that would press each screw's nearest point into the terrain with ``preload``
-newtons, â_k the world axis of joint k at its child origin o_k)::
+``quiet_time``. Then a pre-load is latched as feed-forward torque (virtual
+work: the joint torques that would press each screw's nearest point into the
+terrain with ``preload`` newtons, â_k the world axis of joint k at its child
+origin o_k)::
 
     τ_k = Σ_{s beyond joint k} â_k · ((p_s − o_k) × (−preload · n̂_s))
+
+(p_s: the envelope point facing the terrain in the nearest sample's ring, where
+the SDF contact applies its force)
 
 where the per-screw forces are first made self-equilibrated (Σ F_s n̂_s = 0,
 Σ F_s p_s × n̂_s = 0, the least-squares nearest to ``preload`` with F_s ≥ 0):
 otherwise the joint reactions would spin the free-floating robot (the tail link
 has no contact). These squeeze the robot between opposite surfaces and are
-what presses the screws on the terrain once the springs are gone; the attraction
-is released and gravity switched on: phase 1, holding. Not settled by ``time_limit``: the run stops with the worst screw
-distance and the fastest link.
+what presses the screws on the terrain once the springs are gone.
+
+Phase 1, loading (``load_time`` s, gravity still off): the springs and drag are
+released, the joints stay free and the pre-load torques act alone, so the robot
+conforms under the squeeze until every screw carries its share (a screw that
+latched a fraction of a mm off the wall is pushed onto it; with the joints held
+instead, the other screws' friction would pin the shape and that screw would
+stay unloaded). Phase 2, holding: the set-points are latched at the loaded
+angles, the pre-load stays as feed-forward and gravity is switched on: the
+contact forces are then the pre-load's, and the position gains only resist the
+change gravity brings. ``load_time`` = 0 latches the settled angles and switches
+gravity on at once (fine on a floor; between walls the screws touch with ~0 N at
+the latch and the robot drops ~2 cm before the pre-load builds).
+
+Not settled by ``time_limit``: the run stops with the worst screw distance and
+the fastest link.
 
 Discrete state at ``rate`` (give rate = 1/dt: the drag is a damper and must
-not be held over several steps): [phase, settle_time, quiet_since,
+not be held over several steps): [phase (0 settling, 1 loading, 2 holding), settle_time, quiet_since,
 latched set-points (nj), latched pre-load torques (nj)] (times −1 until set). Outputs are computed at each tick from the state
 and the inputs.
 
 in   link_poses[nl, 7], link_velocities[nl, 6], joint_q[nj]    multibody outputs
      terrain                                                   structured Terrain
 out  wrenches[nl, 6]    N, N·m attraction + drag, world axes about link origins (to wrench_sum)
-     gravity[1]         0 settling, ``gravity_scale`` holding (multibody gravity input, "scale")
+     gravity[1]         0 settling and loading, ``gravity_scale`` holding (multibody gravity input, "scale")
      setpoint[nj]       rad (bend/twist, position mode), rad/s (screws: 0) for joint_pid
      tau_ff[nj]         N·m pre-load torques (0 settling) for joint_pid.tau_ff
-     phase[1]           0 settling, 1 holding
+     phase[1]           0 settling, 1 loading, 2 holding
      settle_time[1]     s, time of the latch (NaN before)
+     hold_time[1]       s, time gravity came on (NaN before)
      gap[ns]            m, each screw's nearest-sample signed distance to the terrain
      max_speed[1]       m/s, fastest link origin
 """
@@ -78,6 +95,7 @@ class SettleParams(RobotSource):
         "speed", description="screw set-points: 0 rad/s (velocity-mode PID) or the latched angle (position "
                              "mode, a brake: a velocity PI lets a screw roll down a vertical wall like a wheel)")
     gravity_scale: float = Field(1.0, description="gravity input while holding (1: the multibody's gravity)")
+    load_time: float = Field(0.0, ge=0, description="s from the latch to gravity on (pre-load builds up meanwhile)")
     rings: int = Field(3, ge=1, description="sample rings per screw (as screw_sdf_contact)")
     per_ring: int = Field(12, ge=1, description="samples per ring")
 
@@ -101,6 +119,7 @@ class Settle(Component[SettleParams]):
     tau_ff = Output(shape=lambda p: (_lay(p).nj,), unit="N*m", feedthrough=(), names=lambda p: _lay(p).joints)
     phase = Output(shape=(1,), unit="1", feedthrough=())
     settle_time = Output(shape=(1,), unit="s", feedthrough=())
+    hold_time = Output(shape=(1,), unit="s", feedthrough=())
     gap = Output(shape=lambda p: (_lay(p).ns,), unit="m", feedthrough=("link_poses", "terrain"),
                  names=lambda p: _lay(p).names)
     max_speed = Output(shape=(1,), unit="m/s", feedthrough=("link_velocities",))
@@ -117,6 +136,10 @@ class Settle(Component[SettleParams]):
         samples = [ScrewContactSamples(lay.radius[s], lay.length[s], p.rings, p.per_ring, lay.lead_angle[s],
                                        int(lay.hand[s]), lay.mount_R[s], lay.mount_p[s]) for s in range(lay.ns)]
         self._pts_B = np.concatenate([s.points for s in samples])          # (n, 3) in the parent body
+        # each sample's ring centre and the screw axis (parent body): where the envelope faces the terrain
+        self._centre_B = self._pts_B - np.concatenate([s.radius * s.radial for s in samples])
+        self._axis_B = np.concatenate([np.repeat(s.axis[None], len(s), axis=0) for s in samples])
+        self._radius = np.repeat(lay.radius, [len(s) for s in samples])
         self._row = np.repeat(lay.parent_row, [len(s) for s in samples])   # parent link row per sample
         self._start = np.concatenate([[0], np.cumsum([len(s) for s in samples])[:-1]])
         self._screw_of = np.repeat(np.arange(lay.ns), [len(s) for s in samples])
@@ -153,11 +176,30 @@ class Settle(Component[SettleParams]):
     def _speed(self, vel):
         return float(np.sqrt((vel[:, :3] ** 2).sum(axis=1)).max())
 
+    def _envelope_points(self, poses, terrain):
+        """Per screw: normal n̂ at its nearest sample and the envelope point facing the terrain in that
+        sample's ring, p = c_ring + r ê_c, ê_c = unit(−n̂ + (n̂·â)â), as the SDF contact applies its force
+        (screw_sdf.py). The sample itself lies up to r sin(π/per_ring) aside: as a lever arm it would
+        skew the self-equilibrated forces (a spurious moment about the normal)."""
+        from scipy.spatial.transform import Rotation
+
+        R = Rotation.from_quat(poses[self._row, 3:]).as_matrix()
+        pts = np.einsum("nij,nj->ni", R, self._pts_B) + poses[self._row, :3]
+        q = terrain.query(pts)
+        first = np.lexsort((q.distance, self._screw_of))[self._start]
+        Rf = R[first]
+        c = np.einsum("nij,nj->ni", Rf, self._centre_B[first]) + poses[self._row[first], :3]
+        a = np.einsum("nij,nj->ni", Rf, self._axis_B[first])
+        n = q.normal[first]
+        e = -n + np.einsum("ni,ni->n", n, a)[:, None] * a
+        e /= np.maximum(np.linalg.norm(e, axis=1), 1e-12)[:, None]
+        return n, c + self._radius[first, None] * e
+
     def _preload_torques(self, poses, terrain):
         """τ_k = Σ_s [s beyond k] â_k · ((p_s − o_k) × (−F n̂_s)): the joint torques pressing each screw into the terrain."""
         from scipy.spatial.transform import Rotation
 
-        _, n, pts, _ = self._nearest(poses, terrain)
+        n, pts = self._envelope_points(poses, terrain)
         # self-equilibrated magnitudes F ≥ 0 nearest to `preload`: Σ F n = 0, Σ F p × n = 0, else the
         # free-floating robot would be spun by the joint reactions (e.g. the contact-less tail link)
         c = pts.mean(axis=0)
@@ -180,12 +222,13 @@ class Settle(Component[SettleParams]):
         if terrain is None:
             raise ValueError(f"{self.name}: input 'terrain' carries no Terrain; connect a terrain component's "
                              "'terrain' output to it")
-        holding = xd[0] >= 1.0
+        latched, holding = xd[0] >= 1.0, xd[0] >= 2.0
         phi, n, pts, rows = self._nearest(u.link_poses, terrain)
         y.gap[:] = phi
         y.max_speed[0] = self._speed(u.link_velocities)
         y.phase[0] = xd[0]
         y.settle_time[0] = xd[1] if xd[1] >= 0.0 else np.nan
+        y.hold_time[0] = xd[1] + self.p.load_time if holding else np.nan
         W = y.wrenches
         W[:] = 0.0
         if holding:
@@ -193,8 +236,12 @@ class Settle(Component[SettleParams]):
             y.setpoint[:] = xd[3:3 + self._nj]
             y.tau_ff[:] = xd[3 + self._nj:]
             return
-        y.tau_ff[:] = 0.0
         y.gravity[0] = 0.0
+        if latched:                                                     # loading: free joints, pre-load only
+            y.setpoint[:] = np.where(self._speed_screw, 0.0, u.joint_q)
+            y.tau_ff[:] = xd[3 + self._nj:]
+            return
+        y.tau_ff[:] = 0.0
         p = self.p
         f = -p.k_attract * np.maximum(phi, 0.0)[:, None] * n
         arm = pts - u.link_poses[rows, :3]
@@ -207,7 +254,12 @@ class Settle(Component[SettleParams]):
 
     def update(self, t, xd, u):
         p = self.p
+        if xd[0] >= 2.0:
+            return
         if xd[0] >= 1.0:
+            if t - xd[1] >= p.load_time - 1e-12:
+                xd[3:3 + self._nj] = np.where(self._speed_screw, 0.0, u.joint_q)
+                xd[0] = 2.0
             return
         phi, _, _, _ = self._nearest(u.link_poses, u.terrain)
         speed = self._speed(u.link_velocities)
@@ -220,7 +272,7 @@ class Settle(Component[SettleParams]):
         if quiet and t - xd[2] >= p.quiet_time - 1e-12:
             xd[3:3 + self._nj] = np.where(self._speed_screw, 0.0, u.joint_q)
             xd[3 + self._nj:] = np.where(self._screw, 0.0, self._preload_torques(u.link_poses, u.terrain))
-            xd[0], xd[1] = 1.0, t
+            xd[0], xd[1] = (2.0 if p.load_time <= 0.0 else 1.0), t
             return
         if t >= p.time_limit:
             worst = int(np.argmax(phi))
