@@ -8,6 +8,7 @@ types are walked; anything else is an error naming the template.
 
 A string that is exactly one template keeps the value's type (``"${k}"`` ->
 2.5); templates inside a longer string are formatted into it (``seg${i}``).
+A format spec after a colon pads systematic names: ``module_${n-1:02d}``.
 """
 
 from __future__ import annotations
@@ -63,7 +64,18 @@ def _number(v, expr: str):
     return v
 
 
+_FORMAT_SPEC = re.compile(r"^(?P<expr>.*?):(?P<spec>0?\d*(?:\.\d+)?[dfge]?)$")
+
+
 def evaluate(expr: str, scope: dict):
+    m = _FORMAT_SPEC.match(expr.strip())
+    if m and m.group("spec"):
+        # ${i+1:02d}: a Python format spec on the result, for zero-padded systematic names
+        value = evaluate(m.group("expr"), scope)
+        try:
+            return format(value, m.group("spec"))
+        except (ValueError, TypeError):
+            raise ConfigError(f"'${{{expr}}}': format '{m.group('spec')}' does not apply to {value!r}") from None
     try:
         tree = ast.parse(expr.strip(), mode="eval")
     except SyntaxError:

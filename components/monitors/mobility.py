@@ -72,7 +72,7 @@ class MobilityMonitor(Component[MobilityParams]):
     link_rotations = Input(shape=lambda p: (len(link_names(p)), 3, 3), unit="1")
     link_poses = Input(shape=lambda p: (len(link_names(p)), 7), unit=None)
     link_velocities = Input(shape=lambda p: (len(link_names(p)), 6), unit=None)
-    contacts = Input(shape=(), unit=None, default=np.nan)
+    contacts = Input(shape=(1,), unit=None, default=np.nan)
     tilt = Output(shape=lambda p: (len(_tilt_names(p)),), unit="rad", names=_tilt_names)
     max_tilt = Output(shape=(), unit="rad")
     failed = Output(shape=(), unit="1")
@@ -142,7 +142,7 @@ class MobilityMonitor(Component[MobilityParams]):
             xd[P0] = u.link_poses[self._ref, :3] @ self._up
             xd[STARTED] = 1.0
         xd[MAX_CLIMB] = max(xd[MAX_CLIMB], self._climb(xd, u))
-        n = u.contacts
+        n = float(u.contacts[0])
         if xd[CONTACT] == 0.0 and n == n and n >= 1:
             xd[CONTACT], xd[T_CONTACT] = 1.0, t
         v = u.link_velocities[self._hold_i, :3]

@@ -224,3 +224,22 @@ def test_parameter_typo_in_a_later_layer_is_an_error(tmp_path):
     assert f"{cfg}:2" in msg and "'dampin' is not a parameter of pendulum.yaml" in msg and "damping" in msg
     with pytest.raises(ConfigError, match="'dampin' is not a parameter"):
         load_session("pendulum", overrides=["parameters.dampin=0.3"], registry=default_registry())
+
+
+@pytest.mark.parametrize("template, scope, expected", [
+    ("module_${n - 1:02d}", {"n": 12}, "module_11"),
+    ("module_${n - 1:02d}", {"n": 4}, "module_03"),
+    ("${x:.2f}", {"x": 1.23456}, "1.23"),
+])
+def test_template_format_spec_pads_systematic_names(template, scope, expected):
+    from snakesim.framework.expressions import substitute
+
+    assert substitute(template, scope) == expected
+
+
+def test_template_format_spec_that_does_not_apply_is_an_error():
+    from snakesim.framework.errors import ConfigError
+    from snakesim.framework.expressions import substitute
+
+    with pytest.raises(ConfigError, match="format '02d' does not apply to 1.5"):
+        substitute("m_${x:02d}", {"x": 1.5})
