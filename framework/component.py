@@ -77,6 +77,8 @@ class Component(Generic[P]):
     type_name: ClassVar[str] = ""
     #: sinks (recorders, viewers, publishers) keep their upstream alive when pruning
     is_sink: ClassVar[bool] = False
+    #: outputs depend on parameters only (no inputs, no state): computed once per run
+    time_invariant: ClassVar[bool] = False
     inputs: ClassVar[dict[str, Input]] = {}
     outputs: ClassVar[dict[str, Output]] = {}
 
@@ -133,6 +135,8 @@ class Component(Generic[P]):
         self.used_outputs = used
 
     def derivative(self, t: float, x, u, dx) -> None:
+        """dx/dt into ``dx``. Always called after ``output()`` on the same (t, x, u), so it may
+        reuse what ``output()`` computed."""
         raise NotImplementedError(f"{type(self).__name__} declares continuous state but no derivative()")
 
     def update(self, t: float, xd, u) -> None:

@@ -80,6 +80,8 @@ class Harness:
         return out
 
     def derivative(self, t: float = 0.0) -> np.ndarray:
+        """dx/dt after the outputs, as in a simulation: derivative() may reuse what output() computed."""
+        self.outputs(t)
         dx = np.zeros(self.ndx)
         self.c.derivative(t, self.x, self.u, dx)
         return dx

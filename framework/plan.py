@@ -123,6 +123,40 @@ class Plan:
         self._manifold = [s for s in self.slices if s.manifold]
         self._lie = [s for s in self._manifold if type(s.comp).dexp_inv is not Component.dexp_inv]
 
+    def sample_at_record_ticks(self, recorded, stopped, every: int) -> list[str]:
+        """A ``calc`` group read by nothing but the recorder runs on recording ticks only.
+
+        Its outputs are held between ticks, which nobody can observe: the
+        recorder reads them exactly when they are fresh. Returns the groups
+        so sampled (for the report).
+        """
+        if every == 1:
+            return []
+        read = set(self.sources.values()) | set(stopped)
+        rec = set(recorded)
+        sampled = []
+        for node, _ in self.calls:
+            refs = [PortRef(node.comp.name, p) for p in node.ports]
+            if (node.method != node.comp.output and node.period == 1 and not any(r in read for r in refs)
+                    and any(r in rec for r in refs)):
+                sampled.append(node)
+        n = self.n_phases * every // math.gcd(self.n_phases, every)
+        if not sampled or n > MAX_PHASES:
+            return []
+        for node in sampled:
+            node.period = every
+        self.updates[:] = [self.updates[p % self.n_phases] for p in range(n)]
+        self.n_phases = n
+        self.major[:] = _major_lists(self.calls, n, self.used)
+        labels = [node.label() for node in sampled]
+        self.report["sampled_at_record_rate"] = labels
+        return labels
+
+    @property
+    def once(self) -> list[tuple]:
+        """Calls of time-invariant components: made once, before the first step."""
+        return [call for node, call in self.calls if node.comp.time_invariant]
+
     # -- outputs nobody reads ------------------------------------------------------------
     def require(self, refs) -> None:
         """Mark more output ports as read (e.g. recorded by a Simulator built later): their
@@ -294,6 +328,8 @@ def _bind(comps, infos, sources, stop_flag):
 def _check_state_kinds(comps, cstates, dstates) -> None:
     for n, c in comps.items():
         cs, xd = cstates[n], dstates[n]
+        if c.time_invariant and (c.inputs or cs is not None or xd is not None or c.rate is not None):
+            raise BuildError(f"{n} ({c.type_name}) is declared time_invariant but has inputs, state or a rate")
         if cs is not None and xd is not None:
             raise BuildError(f"{n} ({c.type_name}) declares both continuous and discrete state; split it in two components")
         if cs is not None and c.rate is not None:
@@ -391,9 +427,18 @@ def _topological_order(nodes, node_of_port, sources) -> list[int]:
 
 
 def _continuous_closure(slices, nodes, node_of_port, sources) -> set[int]:
-    """Nodes the continuous derivatives depend on, through feedthrough; discrete ones are held."""
+    """Nodes the continuous derivatives depend on, through feedthrough; discrete ones are held.
+
+    A stateful component's own ``output()`` group always joins, so ``derivative`` can rely on
+    ``output`` having run on the same (t, x, u) and reuse what it computed (Drake's cache idea).
+    """
     minor: set[int] = set()
     todo = [PortRef(s.comp.name, i) for s in slices for i in s.comp.inputs]
+    stateful = {id(s.comp) for s in slices}
+    for j, node in enumerate(nodes):
+        if id(node.comp) in stateful and node.method == node.comp.output:
+            minor.add(j)
+            todo.extend(PortRef(node.comp.name, d) for d in node.deps)
     seen = set()
     while todo:
         ref = todo.pop()
@@ -425,7 +470,8 @@ def _evaluated(node: Node, used) -> bool:
 
 
 def _major_lists(calls, n_phases, used) -> list[list[tuple]]:
-    return [[call for node, call in calls if phase % node.period == 0 and _evaluated(node, used)]
+    return [[call for node, call in calls
+             if phase % node.period == 0 and _evaluated(node, used) and not node.comp.time_invariant]
             for phase in range(n_phases)]
 
 

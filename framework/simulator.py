@@ -97,7 +97,8 @@ class Simulator:
         self.integrator = integrator
         self.record_refs = record or []
         self.stops = compile_stops(plan, stops)
-        plan.require(list(self.record_refs) + [parse_ref(s.signal, plan.components, "output", w) for s, w in stops])
+        stopped = [parse_ref(s.signal, plan.components, "output", w) for s, w in stops]
+        plan.require(list(self.record_refs) + stopped)
         dt = plan.dt
         if record_rate is None:
             self.record_every = 1
@@ -107,6 +108,7 @@ class Simulator:
                 raise BuildError(f"sim.record_rate {record_rate:g} Hz is not an integer number of base steps "
                                  f"(dt = {dt:g} s); valid: {1 / dt:g}/k Hz")
             self.record_every = n
+        plan.sample_at_record_ticks(self.record_refs, stopped, self.record_every)
         # every run starts from the initial state (one session, many runs)
         self.X0, self.XD0 = plan.X.copy(), plan.XD.copy()
 
@@ -125,6 +127,8 @@ class Simulator:
         if plan.nx:
             integ.bind(plan)      # fresh work arrays, step size and Jacobian
         X_good, XD_good = X.copy(), XD.copy()
+        for fn, x, u, y in plan.once:
+            fn(t0, x, u, y)
         major, updates, derivs = plan.major, plan.updates, plan.derivs
         n_phases, rec_every = plan.n_phases, self.record_every
         has_cont = plan.nx > 0

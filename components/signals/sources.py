@@ -32,6 +32,7 @@ class Constant(Component[ConstantParams]):
     """y = value (held constant)."""
 
     type_name = "constant"
+    time_invariant = True
     Params = ConstantParams
     y = Output(shape="n", unit=None, feedthrough=())
 
