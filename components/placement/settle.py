@@ -81,6 +81,11 @@ from ..contact.screw_samples import ScrewContactSamples
 from ..terrain.base import Terrain
 
 
+#: relative lever arm below which a wall-force moment direction is not imposed on the pre-load (see
+#: Settle._preload_torques)
+WEAK_ARM = 0.02
+
+
 class SettleParams(RobotSource):
     k_attract: float = Field(2000.0, gt=0, description="N/m, attraction spring per screw")
     drag: float = Field(8.0, ge=0, description="1/s, ζ: mass-proportional drag while settling")
@@ -202,13 +207,21 @@ class Settle(Component[SettleParams]):
         n, pts = self._envelope_points(poses, terrain)
         # self-equilibrated magnitudes F ≥ 0 nearest to `preload`: Σ F n = 0, Σ F p × n = 0, else the
         # free-floating robot would be spun by the joint reactions (e.g. the contact-less tail link)
+        # (the moment rows scaled by the spread L of the points). Only the wrench directions the screws
+        # exert with a lever arm above WEAK_ARM·L are imposed: e.g. between walls every force is along
+        # ±y and the contact points lie within ~1 mm of one plane x = const, so the moment about the
+        # normal is ~1e-3 L per newton; imposing it exactly would trade most of the pre-load for a
+        # few mN·m that friction carries anyway.
         c = pts.mean(axis=0)
-        A = np.vstack([n.T, np.cross(pts - c, n).T])                       # (6, ns)
+        L = max(float(np.sqrt(((pts - c) ** 2).sum(axis=1).mean())), 1e-9)
+        A = np.vstack([n.T, np.cross(pts - c, n).T / L])                   # (6, ns), both rows in N per N
+        _, S, Vt = np.linalg.svd(A, full_matrices=False)
+        C = Vt[S > WEAK_ARM * S[0]]                                         # the imposed directions
         from scipy.optimize import lsq_linear
 
-        w = 1e3 * max(1.0, float(np.abs(A).max()))          # equality by a heavy penalty, F ≥ 0 by bounds
-        M = np.vstack([np.eye(self._ns), w * A])
-        rhs = np.concatenate([np.full(self._ns, self.p.preload), np.zeros(6)])
+        w = 1e3                                             # equality by a heavy penalty, F ≥ 0 by bounds
+        M = np.vstack([np.eye(self._ns), w * C])
+        rhs = np.concatenate([np.full(self._ns, self.p.preload), np.zeros(len(C))])
         self.preload_forces = F = lsq_linear(M, rhs, bounds=(0.0, np.inf)).x
         f = -F[:, None] * n                                                 # (ns, 3) into the terrain
         Rj = Rotation.from_quat(poses[self._jrow, 3:]).as_matrix()

@@ -67,16 +67,37 @@ def test_latch_after_quiet_time_sets_gravity_setpoints_and_preload():
     for i in range(12):
         h.update(i * 1e-3)
     y = h.outputs(0.012)
-    assert y["phase"][0] == 1.0 and y["gravity"][0] == 1.0 and y["settle_time"][0] == pytest.approx(0.01)
+    # load_time 0: straight to holding (phase 2), gravity on at the latch
+    assert y["phase"][0] == 2.0 and y["gravity"][0] == 1.0 and y["settle_time"][0] == pytest.approx(0.01)
+    assert y["hold_time"][0] == pytest.approx(0.01)
     assert np.all(y["wrenches"] == 0.0)
     # on one plane the pressing forces cannot balance (all push down): the self-equilibrated preload is ~0
     assert np.abs(h.c.preload_forces).max() < 1e-3 * 50.0
 
 
+def test_loading_phase_keeps_gravity_off_and_joints_free_then_latches_the_loaded_shape():
+    o = straight_poses(0.0695)
+    h = settle(quiet_time=0.01, load_time=0.005)
+    h.inputs.link_poses, h.inputs.link_velocities, h.inputs.joint_q = o["link_poses"], o["link_velocities"], o["joint_q"]
+    for i in range(12):
+        h.update(i * 1e-3)
+    q = o["joint_q"] + 0.01                                    # the shape moves while loading
+    h.inputs.joint_q = q
+    y = h.outputs(0.012)
+    assert y["phase"][0] == 1.0 and y["gravity"][0] == 0.0 and np.isnan(y["hold_time"][0])
+    np.testing.assert_array_equal(y["setpoint"][~h.c._screw | (h.c.p.screw_hold == "angle")], q[~h.c._screw])
+    for i in range(12, 16):
+        h.update(i * 1e-3)
+    h.inputs.joint_q = q + 0.02                                # after the latch the set-points stay
+    y = h.outputs(0.016)
+    assert y["phase"][0] == 2.0 and y["gravity"][0] == 1.0 and y["hold_time"][0] == pytest.approx(0.015)
+    np.testing.assert_allclose(y["setpoint"][~h.c._screw], q[~h.c._screw])
+
+
 P = "placement-scene/"
 
 
-@pytest.mark.parametrize("scene, duration", [("placement-tube", 1.8), ("placement-walls", 4.2)])
+@pytest.mark.parametrize("scene, duration", [("placement-tube", 1.8), ("placement-walls", 2.0)])
 def test_eels15_settles_with_every_screw_within_1mm(scene, duration):
     r = load_session(scene, sim_overrides={"duration": duration}).run()
     T, ph = r["t"], r[P + "settle.phase"][:, 0]
