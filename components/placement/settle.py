@@ -49,6 +49,17 @@ the latch and the robot drops ~2 cm before the pre-load builds).
 Not settled by ``time_limit``: the run stops with the worst screw distance and
 the fastest link.
 
+Hand-over ("the autonomy system then takes over"): the optional ``drive`` input is
+added to the set-points from ``drive_delay`` s after gravity came on, e.g. a
+screw_schedule's set-points: rad/s on screws held by speed (``screw_hold: speed``,
+velocity-mode PID), rad on position-mode joints (offsets from the latched shape).
+Before that (and unconnected: 0) it is ignored, so locomotion starts from the
+settled, held state whenever the latch happens.
+
+Viewing (paper fig. 9, the yellow arrows): ``attraction`` is the set of springs
+acting now, one per pulled screw (φ_s > 0, settling only): the nearest sample p_s
+and f_s, world frame; empty once latched. Computed only when something reads it.
+
 Discrete state at ``rate`` (give rate = 1/dt: the drag is a damper and must
 not be held over several steps): [phase (0 settling, 1 loading, 2 holding), settle_time, quiet_since,
 latched set-points (nj), latched pre-load torques (nj)] (times −1 until set). Outputs are computed at each tick from the state
@@ -56,6 +67,7 @@ and the inputs.
 
 in   link_poses[nl, 7], link_velocities[nl, 6], joint_q[nj]    multibody outputs
      terrain                                                   structured Terrain
+     drive[nj]          set-point offsets once holding (optional, default 0): rad/s screws, rad others
 out  wrenches[nl, 6]    N, N·m attraction + drag, world axes about link origins (to wrench_sum)
      gravity[1]         0 settling and loading, ``gravity_scale`` holding (multibody gravity input, "scale")
      setpoint[nj]       rad (bend/twist, position mode), rad/s (screws: 0) for joint_pid
@@ -65,11 +77,13 @@ out  wrenches[nl, 6]    N, N·m attraction + drag, world axes about link origins
      hold_time[1]       s, time gravity came on (NaN before)
      gap[ns]            m, each screw's nearest-sample signed distance to the terrain
      max_speed[1]       m/s, fastest link origin
+     attraction         AttractionSet: points (n, 3) m, forces (n, 3) N, world; the springs now (n = 0 latched)
 """
 
 from __future__ import annotations
 
 import numpy as np
+from dataclasses import dataclass
 from typing import Literal
 
 from pydantic import Field
@@ -84,6 +98,22 @@ from ..terrain.base import Terrain
 #: relative lever arm below which a wall-force moment direction is not imposed on the pre-load (see
 #: Settle._preload_torques)
 WEAK_ARM = 0.02
+
+
+@dataclass(frozen=True)
+class AttractionSet:
+    """The attraction springs acting now: spring s pulls the world point ``points[s]`` (m) with
+    ``forces[s]`` (N, world axes), f = −k_attract φ n̂. Only screws with φ > 0 are listed; none once latched."""
+
+    points: np.ndarray
+    forces: np.ndarray
+
+    def __len__(self) -> int:
+        return int(self.points.shape[0])
+
+    @classmethod
+    def empty(cls) -> "AttractionSet":
+        return cls(np.zeros((0, 3)), np.zeros((0, 3)))
 
 
 class SettleParams(RobotSource):
@@ -101,6 +131,7 @@ class SettleParams(RobotSource):
                              "mode, a brake: a velocity PI lets a screw roll down a vertical wall like a wheel)")
     gravity_scale: float = Field(1.0, description="gravity input while holding (1: the multibody's gravity)")
     load_time: float = Field(0.0, ge=0, description="s from the latch to gravity on (pre-load builds up meanwhile)")
+    drive_delay: float = Field(0.0, ge=0, description="s from gravity on to adding the drive input to the set-points")
     rings: int = Field(3, ge=1, description="sample rings per screw (as screw_sdf_contact)")
     per_ring: int = Field(12, ge=1, description="samples per ring")
 
@@ -117,9 +148,10 @@ class Settle(Component[SettleParams]):
     link_velocities = Input(shape=lambda p: (_lay(p).nl, 6), unit=None)
     joint_q = Input(shape=lambda p: (_lay(p).nj,), unit="rad")
     terrain = Input(type=Terrain)
+    drive = Input(shape=lambda p: (_lay(p).nj,), unit=None, default=0.0, names=lambda p: _lay(p).joints)
     wrenches = Output(shape=lambda p: (_lay(p).nl, 6), unit=None, feedthrough=("link_poses", "link_velocities", "terrain"))
     gravity = Output(shape=(1,), unit="1", feedthrough=())
-    setpoint = Output(shape=lambda p: (_lay(p).nj,), unit=None, feedthrough=("joint_q",),
+    setpoint = Output(shape=lambda p: (_lay(p).nj,), unit=None, feedthrough=("joint_q", "drive"),
                       names=lambda p: _lay(p).joints)
     tau_ff = Output(shape=lambda p: (_lay(p).nj,), unit="N*m", feedthrough=(), names=lambda p: _lay(p).joints)
     phase = Output(shape=(1,), unit="1", feedthrough=())
@@ -128,6 +160,7 @@ class Settle(Component[SettleParams]):
     gap = Output(shape=lambda p: (_lay(p).ns,), unit="m", feedthrough=("link_poses", "terrain"),
                  names=lambda p: _lay(p).names)
     max_speed = Output(shape=(1,), unit="m/s", feedthrough=("link_velocities",))
+    attraction = Output(type=AttractionSet, feedthrough=("link_poses", "terrain"), calc="calc_attraction")
 
     def setup(self):
         from snakesim.components.control.robot_source import joint_kind, robot_layout
@@ -161,6 +194,7 @@ class Settle(Component[SettleParams]):
         self._distal = np.array([[lay.links[r] in b for r in lay.parent_row] for b in beyond], dtype=float)
         self._T = 1.0 / self.rate
         self._need = int(np.ceil(p.min_contact_fraction * lay.ns - 1e-9))
+        self._seen = (None, np.full((lay.nl, 7), np.nan), None)      # (terrain, poses, nearest) of output()
 
     def discrete_state(self):
         return np.concatenate([[0.0, -1.0, -1.0], np.zeros(2 * self._nj)])     # times < 0: not yet
@@ -236,7 +270,9 @@ class Settle(Component[SettleParams]):
             raise ValueError(f"{self.name}: input 'terrain' carries no Terrain; connect a terrain component's "
                              "'terrain' output to it")
         latched, holding = xd[0] >= 1.0, xd[0] >= 2.0
-        phi, n, pts, rows = self._nearest(u.link_poses, terrain)
+        phi, n, pts, rows = nearest = self._nearest(u.link_poses, terrain)
+        if "attraction" in self.used_outputs:        # for calc_attraction at the same inputs
+            self._seen = (terrain, u.link_poses.copy(), nearest)
         y.gap[:] = phi
         y.max_speed[0] = self._speed(u.link_velocities)
         y.phase[0] = xd[0]
@@ -247,6 +283,8 @@ class Settle(Component[SettleParams]):
         if holding:
             y.gravity[0] = self.p.gravity_scale
             y.setpoint[:] = xd[3:3 + self._nj]
+            if t >= xd[1] + self.p.load_time + self.p.drive_delay - 1e-12:
+                y.setpoint[:] += u.drive
             y.tau_ff[:] = xd[3 + self._nj:]
             return
         y.gravity[0] = 0.0
@@ -264,6 +302,17 @@ class Settle(Component[SettleParams]):
         W[:, :3] -= p.drag * m * u.link_velocities[:, :3]
         W[:, 3:] -= p.drag * m * p.gyration ** 2 * u.link_velocities[:, 3:]
         y.setpoint[:] = np.where(self._speed_screw, 0.0, u.joint_q)     # free joints: the PID only damps
+
+    def calc_attraction(self, t, xd, u, y):
+        if xd[0] >= 1.0:
+            y.attraction = AttractionSet.empty()
+            return
+        terrain, poses, nearest = self._seen
+        if terrain is not u.terrain or not np.array_equal(poses, u.link_poses):
+            nearest = self._nearest(u.link_poses, u.terrain)          # output() saw other inputs
+        phi, n, pts, _ = nearest
+        pulled = phi > 0.0
+        y.attraction = AttractionSet(pts[pulled].copy(), -self.p.k_attract * phi[pulled, None] * n[pulled])
 
     def update(self, t, xd, u):
         p = self.p

@@ -6,8 +6,10 @@ Components are found by what their class declares, not by name:
               its link_poses are wired in and its robot source keys copied, so the
               sink draws the same URDF
     terrain   the first structured output of a Terrain type
-    contacts  the first structured output whose type has ``points`` and ``forces``
-              fields (ContactSet, any contact back end)
+    attraction the first structured output of placement_settle's AttractionSet type
+              (checked first: it too has ``points`` and ``forces``)
+    contacts  the first other structured output whose type has ``points`` and
+              ``forces`` fields (ContactSet, any contact back end)
     tethers   the first structured output with ``strips`` or ``points`` (and no
               ``forces``) on a component or port whose name says "tether"; else a
               component whose params list ``tethers: [{link, offset, anchor}]``
@@ -40,6 +42,7 @@ class Attached:
     robot: str | None = None
     terrain: str | None = None
     contacts: str | None = None
+    attraction: str | None = None
     tethers: str | None = None
     series: list[str] = dataclasses.field(default_factory=list)
     rate: float = VIEWER_RATE_HZ
@@ -88,6 +91,7 @@ def viewer_period(dt: float, rates, target_hz: float = VIEWER_RATE_HZ) -> int:
 def attach_viewer(resolved: Resolved, target: VizTarget, registry=None, name: str = "viz",
                   params: dict | None = None) -> Attached:
     """Add a ``rerun_viewer`` component to ``resolved`` and wire it (in place)."""
+    from snakesim.components.placement.settle import AttractionSet
     from snakesim.components.terrain import Terrain
     from snakesim.framework.registry import default_registry
 
@@ -112,6 +116,10 @@ def attach_viewer(resolved: Resolved, target: VizTarget, registry=None, name: st
             if found.terrain is None and isinstance(sig.cls, type) and issubclass(sig.cls, Terrain):
                 found.terrain = comp
                 conns.append((f"{comp}.{port}", f"{name}.terrain"))
+            elif isinstance(sig.cls, type) and issubclass(sig.cls, AttractionSet):
+                if found.attraction is None:           # never taken for contacts, even when a second one
+                    found.attraction = comp
+                    conns.append((f"{comp}.{port}", f"{name}.attraction"))
             elif found.contacts is None and {"points", "forces"} <= fields:
                 found.contacts = comp
                 conns.append((f"{comp}.{port}", f"{name}.contacts"))

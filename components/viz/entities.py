@@ -11,6 +11,8 @@ duration in seconds from the run's t0)::
     world/debug/contacts/normal_forces         Arrows3D               F_n n, scaled (m per N); the whole
                                                                       force when the contact value has no normals
     world/debug/contacts/friction_forces       Arrows3D               F - F_n n, scaled
+    world/debug/attraction                     Arrows3D               placement attraction springs (paper
+                                                                      fig. 9, yellow), scaled; empty once latched
     world/debug/frames/<link>                  Transform3D + Arrows3D body frame axes (on request)
     plots/<component>/<port>                   Scalars                a recorded signal, one series per element
     plots/sim/real_time_factor                 Scalars                simulated s per wall-clock s
@@ -43,6 +45,7 @@ TETHERS = f"{PHYSICAL}/tethers"
 CONTACT_POINTS = f"{DEBUG}/contacts/points"
 CONTACT_NORMAL = f"{DEBUG}/contacts/normal_forces"
 CONTACT_FRICTION = f"{DEBUG}/contacts/friction_forces"
+ATTRACTION = f"{DEBUG}/attraction"
 FRAMES = f"{DEBUG}/frames"
 REAL_TIME_FACTOR = f"{PLOTS}/sim/real_time_factor"
 

@@ -8,7 +8,7 @@ entities (layout: :mod:`.entities`). Costs are kept off the simulation:
 - frames are buffered and sent with ``send_columns``, one call per entity
   per ``flush_frames`` frames (per-frame ``log`` calls cost ~80 µs per
   entity; a 30-frame column batch ~10 µs per entity-frame);
-- contacts and tethers change size every frame: they are batched the
+- contacts, attraction arrows and tethers change size every frame: they are batched the
   same way, as partitioned columns (one partition per frame; an empty one
   clears the previous frame's), their colours and radii logged once, static.
 """
@@ -26,6 +26,7 @@ NORMAL_COLOR = (70, 140, 255, 255)
 FRICTION_COLOR = (255, 150, 40, 255)
 POINT_COLOR = (255, 230, 60, 255)
 TETHER_COLOR = (250, 200, 40, 255)
+ATTRACTION_COLOR = (255, 235, 0, 255)         # yellow, as the attraction arrows of paper fig. 9
 
 
 class SceneLog:
@@ -41,7 +42,7 @@ class SceneLog:
     def __init__(self, rec, *, robot: str | None = None, link_names: Sequence[str] = (), meshes=(),
                  series: Sequence[tuple[str, Sequence[str] | None, int]] = (), body_frames: bool = False,
                  frame_length: float = 0.1, force_scale: float = 0.002, flush_frames: int = 30,
-                 contacts: bool = False, tethers: bool = False):
+                 contacts: bool = False, tethers: bool = False, attraction: bool = False):
         import rerun as rr
 
         self.rr, self.rec = rr, rec
@@ -62,8 +63,9 @@ class SceneLog:
         self._vals = [np.zeros((n, w)) for _, _, w in self.series]
         self._rtf = np.full(n, np.nan)
         self._n = 0
-        self.contacts, self.tethers = contacts, tethers
+        self.contacts, self.tethers, self.attraction = contacts, tethers, attraction
         self._c_pts, self._c_fn, self._c_ft, self._tethers = [], [], [], []
+        self._a_pts, self._a_vec = [], []
 
     # -- static geometry ------------------------------------------------------------------
     def log_static(self, terrain_mesh=None) -> None:
@@ -91,13 +93,16 @@ class SceneLog:
             rec.log(E.CONTACT_FRICTION, rr.Arrows3D.from_fields(colors=FRICTION_COLOR, radii=0.004), static=True)
         if self.tethers:
             rec.log(E.TETHERS, rr.LineStrips3D.from_fields(colors=TETHER_COLOR, radii=0.006), static=True)
+        if self.attraction:
+            rec.log(E.ATTRACTION, rr.Arrows3D.from_fields(colors=ATTRACTION_COLOR, radii=0.005), static=True)
 
     # -- frames (buffered) ----------------------------------------------------------------
     def add_frame(self, t: float, poses=None, values: Sequence[np.ndarray] = (), rtf: float = np.nan,
-                  contacts=None, tethers=None) -> None:
+                  contacts=None, tethers=None, attraction=None) -> None:
         """Queue one frame: link poses [nl, 7] (xyz + quaternion xyzw, world), one array
-        per series, the real-time factor, the contact set and tether polylines (when the
-        log was made with ``contacts``/``tethers``). Sent when ``flush_frames`` are queued."""
+        per series, the real-time factor, the contact set, tether polylines and attraction
+        springs (when the log was made with ``contacts``/``tethers``/``attraction``). Sent
+        when ``flush_frames`` are queued."""
         k = self._n
         self._t[k] = t
         if poses is not None and self._poses.shape[1]:
@@ -109,6 +114,8 @@ class SceneLog:
             self._queue_contacts(contacts)
         if self.tethers:
             self._tethers.append(tether_strips(tethers) or [])
+        if self.attraction:
+            self._queue_attraction(attraction)
         self._n = k + 1
         if self._n == self._cap:
             self.flush()
@@ -129,6 +136,8 @@ class SceneLog:
             self._flush_contacts(t)
         if self.tethers:
             self._flush_tethers(t)
+        if self.attraction:
+            self._flush_attraction(t)
 
     def send_poses(self, t: np.ndarray, poses: np.ndarray) -> None:
         """Transforms of every meshed link (and body frame) at times t (n,) from poses (n, nl, 7)."""
@@ -186,6 +195,23 @@ class SceneLog:
         rec.send_columns(E.CONTACT_FRICTION, indexes=index,
                          columns=rr.Arrows3D.columns(vectors=vec, origins=org).partition(flen))
         self._c_pts, self._c_fn, self._c_ft = [], [], []
+
+    def _queue_attraction(self, a) -> None:
+        """Arrows of the attraction springs: anything with ``points`` (m, 3) and ``forces`` (m, 3) N;
+        arrow = force · force_scale (m/N) from its point. None: an empty frame (clears the last)."""
+        pts = np.array(a.points, dtype=float).reshape(-1, 3) if a is not None else np.zeros((0, 3))
+        f = np.array(a.forces, dtype=float).reshape(-1, 3) if len(pts) else np.zeros((0, 3))
+        self._a_pts.append(pts)
+        self._a_vec.append(self.force_scale * f)
+
+    def _flush_attraction(self, t) -> None:
+        rr = self.rr
+        lens = [len(p) for p in self._a_pts]
+        pts = np.concatenate(self._a_pts) if sum(lens) else np.zeros((0, 3))
+        vec = np.concatenate(self._a_vec) if sum(lens) else np.zeros((0, 3))
+        self.rec.send_columns(E.ATTRACTION, indexes=[rr.TimeColumn(E.TIMELINE, duration=t)],
+                              columns=rr.Arrows3D.columns(vectors=vec, origins=pts).partition(lens))
+        self._a_pts, self._a_vec = [], []
 
     def _flush_tethers(self, t) -> None:
         self.send_tethers(t, self._tethers)

@@ -1,4 +1,5 @@
-"""Rerun viewer sink: the robot, terrain, contacts, tethers and recorded signals, live or to an .rrd.
+"""Rerun viewer sink: the robot, terrain, contacts, tethers, placement attraction and recorded signals,
+live or to an .rrd.
 
 A sink (``is_sink``): it keeps its upstream alive, has no outputs and runs
 as a discrete component at the viewer rate (its ``rate``; without one it
@@ -14,6 +15,9 @@ in   link_poses[nl, 7]  m, 1  [x, y, z, qx, qy, qz, qw] per link, world (the mul
      contacts           any structured value with ``points`` (m, 3) and ``forces`` (m, 3) N,
                         e.g. ContactSet; split into normal and friction arrows when it also
                         has ``normals`` and ``normal_force`` (optional)
+     attraction         placement attraction springs: any structured value with ``points`` (m, 3)
+                        and ``forces`` (m, 3) N (placement_settle's AttractionSet), drawn as
+                        yellow arrows under world/debug/attraction (optional)
      tethers            any structured value with ``strips``/``points`` polylines (optional);
                         without it, params.tether_lines are drawn as straight segments from
                         each tie point (link pose · offset) to its anchor
@@ -23,9 +27,9 @@ out  none
 
 First frame: opens the recording (:func:`.target.open_recording`: headless
 machines never spawn a window), logs the static meshes. Every frame: link
-transforms, series values and the real-time factor are queued and sent in
-``send_columns`` batches (:class:`.scene_log.SceneLog`); contacts and tethers
-are logged directly. Everything is sent and the file closed at ``t_end``,
+transforms, series values, the real-time factor, contacts, attraction arrows
+and tethers are queued and sent in ``send_columns`` batches
+(:class:`.scene_log.SceneLog`). Everything is sent and the file closed at ``t_end``,
 on :meth:`close`, or at interpreter exit. A later run of the same instance
 (time going back) starts a new recording. Entity layout and the physical /
 ornamental contract: :mod:`.entities`.
@@ -71,7 +75,7 @@ class RerunSinkParams(Params):
     terrain_cutaway: Vec3 | None = Field((0.0, -0.6, 0.8), description="enclosing terrain cut away towards this")
     body_frames: bool = Field(False, description="draw every link frame (ornamental)")
     frame_length: float = Field(0.1, gt=0, description="m, body frame axis length")
-    force_scale: float = Field(0.002, gt=0, description="m of arrow per N of contact force")
+    force_scale: float = Field(0.002, gt=0, description="m of arrow per N of contact or attraction force")
     series: list[str] = Field(default_factory=list, description="'comp.port' plotted from inputs s0, s1, ...")
     tether_lines: list[dict] = Field(default_factory=list,
                                      description="[{link, offset, anchor}]: straight ropes drawn from link_poses")
@@ -119,6 +123,7 @@ class RerunSink(Component[RerunSinkParams]):
     terrain = Input(type=Terrain, required=False, doc="drawn once, static")
     contacts = Input(type=object, required=False, doc="anything with points (m,3) and forces (m,3)")
     tethers = Input(type=object, required=False, doc="anything with strips/points polylines")
+    attraction = Input(type=object, required=False, doc="placement springs: points (m,3), forces (m,3)")
 
     def setup(self):
         p = self.p
@@ -161,7 +166,8 @@ class RerunSink(Component[RerunSinkParams]):
         tethers = u.tethers if self._has_tethers else (
             self._ropes.segments(self._poses) if self._ropes is not None else None)
         self._log.add_frame(t, self._poses, self._series, rtf,
-                            contacts=u.contacts if self._has_contacts else None, tethers=tethers)
+                            contacts=u.contacts if self._has_contacts else None, tethers=tethers,
+                            attraction=u.attraction if self._has_attraction else None)
         if self.p.t_end is not None and t >= self.p.t_end - 0.5 * self._period:
             self.close()
 
@@ -175,6 +181,7 @@ class RerunSink(Component[RerunSinkParams]):
         self._series = [getattr(u, series_input_name(i)) for i in range(len(p.series))]
         self._has_contacts = u.contacts is not None
         self._has_tethers = u.tethers is not None
+        self._has_attraction = u.attraction is not None
         self._ropes = _ropes(p.tether_lines, self.links) if not self._has_tethers else None
         pos = np.asarray(self._poses)[:, :3] if len(self.links) else np.zeros((1, 3))
         center = np.asarray(p.terrain_center) if p.terrain_center is not None else pos.mean(axis=0)
@@ -190,6 +197,7 @@ class RerunSink(Component[RerunSinkParams]):
         self._log = SceneLog(rec, robot=p.robot_component, link_names=self.links, meshes=self._meshes, series=series,
                              body_frames=p.body_frames, frame_length=p.frame_length, force_scale=p.force_scale,
                              flush_frames=p.flush_frames, contacts=self._has_contacts,
+                             attraction=self._has_attraction,
                              tethers=self._has_tethers or self._ropes is not None)
         self._log.log_static(tmesh)
         self._finalizer = weakref.finalize(self, _finish, self._log, rec, self.used_target.mode)
