@@ -113,7 +113,13 @@ class Component(Generic[P]):
 
     # -- hooks a component overrides ------------------------------------------
     def setup(self) -> None:
-        """Derive constants from ``self.p`` (called once, after validation)."""
+        """Derive constants from ``self.p`` (called once, after validation).
+
+        A component whose port count depends on its params (a recorder or viewer
+        taking N signals) may extend its ports here by assigning new dicts to
+        ``self.inputs`` / ``self.outputs`` (class ports plus ``Input``/``Output``
+        instances with ``name`` set); the build reads the instance's ports.
+        """
 
     def continuous_state(self) -> ContinuousState | None:
         return None
