@@ -24,7 +24,6 @@ reduced set of settings (a few minutes); full: 45 s traverse, 4 s walls, every s
 from __future__ import annotations
 
 import json
-import math
 import sys
 from pathlib import Path
 
@@ -129,7 +128,7 @@ def main(quick, json_path, plot_path, only):
         t_ref, p_ref, _ = _track(ref, scene)
         print(f"\n{scene}: {horizon:g} s; reference rk4 dt={REFERENCE['dt']:g}: {ref.summary['stop_reason']}, "
               f"RTF {ref.summary['real_time_factor']:.3g}", flush=True)
-        print(f"| setting | wall s | RTF | pos err m | yaw err rad | stable | stop |\n|---|---:|---:|---:|---:|---|---|")
+        print("| setting | wall s | RTF | pos err m | yaw err rad | stable | stop |\n|---|---:|---:|---:|---:|---|---|")
         for s in settings(quick):
             m = measure(scene, sets, horizon, s)
             row = {"scene": scene, "setting": s["label"], "horizon_s": horizon}

@@ -29,7 +29,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 from .errors import ConfigError
 from .expressions import substitute
 from .layering import TOP_KEYS, deep_merge, merge_layer, set_override
-from .yaml_source import LocatedDict, LocatedList, load_yaml
+from .yaml_source import LocatedDict, load_yaml
 
 
 class _Strict(BaseModel):

@@ -15,46 +15,55 @@ from numba import njit
 from .kernels import EV_FLOOR, MODES
 
 
+@njit(cache=True, inline="always")
+def point_contact_force(depth, nx, ny, nz, vx, vy, vz, ex, ey, ez, stiffness, damping, mu, ev_a, ev_b, v_eps,
+                        mode, ev_floor):
+    """Eq. 2 and regularised eq. 6 at one point -> (F_n, F_x, F_y, F_z), world frame.
+
+    n̂ unit outward normal, v the robot point's velocity relative to the terrain, e the
+    anisotropy axis (any length: projected on the tangent plane and normalised here; none
+    left means isotropic). The one copy of the contact law every numba back end calls.
+    """
+    vn = vx * nx + vy * ny + vz * nz
+    fn = 0.0
+    if depth > 0.0:
+        fn = stiffness * depth - damping * vn
+        if fn < 0.0:
+            fn = 0.0                                   # never pulls
+    # tangential slip and its regularised direction
+    tx, ty, tz = vx - vn * nx, vy - vn * ny, vz - vn * nz
+    speed = math.sqrt(tx * tx + ty * ty + tz * tz)
+    if mode == 0:
+        den = math.sqrt(speed * speed + v_eps * v_eps)
+    else:
+        den = speed if speed > v_eps else v_eps
+    g = 1.0 / den if den > 0.0 else 0.0
+    sx, sy, sz = tx * g, ty * g, tz * g
+    # anisotropy axis in the tangent plane
+    en = ex * nx + ey * ny + ez * nz
+    ex, ey, ez = ex - en * nx, ey - en * ny, ez - en * nz
+    enorm = math.sqrt(ex * ex + ey * ey + ez * ez)
+    if enorm > 1e-12:
+        ex, ey, ez = ex / enorm, ey / enorm, ez / enorm
+    else:
+        ex, ey, ez = 0.0, 0.0, 0.0
+    k = ev_a + ev_b * fn
+    if k < ev_floor:
+        k = ev_floor
+    c = (k - 1.0) * (sx * ex + sy * ey + sz * ez)
+    m = -mu * fn
+    return fn, fn * nx + m * (sx + c * ex), fn * ny + m * (sy + c * ey), fn * nz + m * (sz + c * ez)
+
+
 @njit(cache=True)
 def contact_forces_nb(depth, normal, velocity, e_dir, stiffness, damping, mu, ev_a, ev_b, v_eps, mode,
                       ev_floor, out_force, out_fn):
-    n = depth.shape[0]
-    for i in range(n):
-        nx, ny, nz = normal[i, 0], normal[i, 1], normal[i, 2]
-        vx, vy, vz = velocity[i, 0], velocity[i, 1], velocity[i, 2]
-        vn = vx * nx + vy * ny + vz * nz
-        fn = 0.0
-        if depth[i] > 0.0:
-            fn = stiffness * depth[i] - damping * vn
-            if fn < 0.0:
-                fn = 0.0
+    for i in range(depth.shape[0]):
+        fn, fx, fy, fz = point_contact_force(
+            depth[i], normal[i, 0], normal[i, 1], normal[i, 2], velocity[i, 0], velocity[i, 1], velocity[i, 2],
+            e_dir[i, 0], e_dir[i, 1], e_dir[i, 2], stiffness, damping, mu, ev_a, ev_b, v_eps, mode, ev_floor)
         out_fn[i] = fn
-        # tangential slip and regularised direction
-        tx, ty, tz = vx - vn * nx, vy - vn * ny, vz - vn * nz
-        speed = math.sqrt(tx * tx + ty * ty + tz * tz)
-        if mode == 0:
-            den = math.sqrt(speed * speed + v_eps * v_eps)
-        else:
-            den = speed if speed > v_eps else v_eps
-        g = 1.0 / den if den > 0.0 else 0.0
-        sx, sy, sz = tx * g, ty * g, tz * g
-        # anisotropy axis in the tangent plane
-        ex, ey, ez = e_dir[i, 0], e_dir[i, 1], e_dir[i, 2]
-        en = ex * nx + ey * ny + ez * nz
-        ex, ey, ez = ex - en * nx, ey - en * ny, ez - en * nz
-        enorm = math.sqrt(ex * ex + ey * ey + ez * ez)
-        if enorm > 1e-12:
-            ex, ey, ez = ex / enorm, ey / enorm, ez / enorm
-        else:
-            ex, ey, ez = 0.0, 0.0, 0.0
-        k = ev_a + ev_b * fn
-        if k < ev_floor:
-            k = ev_floor
-        c = (k - 1.0) * (sx * ex + sy * ey + sz * ez)
-        m = -mu * fn
-        out_force[i, 0] = fn * nx + m * (sx + c * ex)
-        out_force[i, 1] = fn * ny + m * (sy + c * ey)
-        out_force[i, 2] = fn * nz + m * (sz + c * ez)
+        out_force[i, 0], out_force[i, 1], out_force[i, 2] = fx, fy, fz
 
 
 @njit(cache=True)

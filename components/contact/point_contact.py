@@ -13,7 +13,6 @@ the body-wrench reduction is screw_samples.body_wrenches / kernels_numba.body_wr
 
 from __future__ import annotations
 
-import numpy as np
 from pydantic import Field
 
 from snakesim.framework import Component, Input, Output

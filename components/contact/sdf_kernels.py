@@ -14,8 +14,9 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 from numba import njit
+
+from .kernels_numba import point_contact_force
 
 K, C, MU, EV_A, EV_B = range(5)
 
@@ -132,36 +133,12 @@ def contact_wrenches(m, distance, normal, material, sample, owner, poses, vels, 
         out_point[i, 0], out_point[i, 1], out_point[i, 2] = px, py, pz
         out_vel[i, 0], out_vel[i, 1], out_vel[i, 2] = vx, vy, vz
         mat = material[i]
-        vn = vx * nx + vy * ny + vz * nz
-        fn = mats[mat, K] * d - mats[mat, C] * vn
-        if fn < 0.0:
-            fn = 0.0                                   # never pulls
-        out_fn[i] = fn
-        tx, ty, tz = vx - vn * nx, vy - vn * ny, vz - vn * nz
-        speed = math.sqrt(tx * tx + ty * ty + tz * tz)
-        if mode == 0:
-            den = math.sqrt(speed * speed + v_eps * v_eps)
-        else:
-            den = speed if speed > v_eps else v_eps
-        g = 1.0 / den if den > 0.0 else 0.0
-        sx, sy, sz = tx * g, ty * g, tz * g
+        # ê_v: normal to the thread line at p_c (lead angle, hand), projected in the kernel
         cl, sl = math.cos(lead_angle[s]), hand[s] * math.sin(lead_angle[s])
-        ex, ey, ez = cl * ax - sl * cx, cl * ay - sl * cy, cl * az - sl * cz
-        en = ex * nx + ey * ny + ez * nz
-        ex, ey, ez = ex - en * nx, ey - en * ny, ez - en * nz
-        enorm = math.sqrt(ex * ex + ey * ey + ez * ez)
-        if enorm > 1e-12:
-            ex, ey, ez = ex / enorm, ey / enorm, ez / enorm
-        else:
-            ex, ey, ez = 0.0, 0.0, 0.0
-        k = mats[mat, EV_A] + mats[mat, EV_B] * fn
-        if k < ev_floor:
-            k = ev_floor
-        cc = (k - 1.0) * (sx * ex + sy * ey + sz * ez)
-        mf = -mats[mat, MU] * fn
-        fx = fn * nx + mf * (sx + cc * ex)
-        fy = fn * ny + mf * (sy + cc * ey)
-        fz = fn * nz + mf * (sz + cc * ez)
+        fn, fx, fy, fz = point_contact_force(
+            d, nx, ny, nz, vx, vy, vz, cl * ax - sl * cx, cl * ay - sl * cy, cl * az - sl * cz,
+            mats[mat, K], mats[mat, C], mats[mat, MU], mats[mat, EV_A], mats[mat, EV_B], v_eps, mode, ev_floor)
+        out_fn[i] = fn
         out_force[i, 0], out_force[i, 1], out_force[i, 2] = fx, fy, fz
         out_screw_fn[s] += fn
         o = screw_row[s]

@@ -14,7 +14,6 @@ out  y[nl, 6]       (feedthrough)
 
 from __future__ import annotations
 
-import numpy as np
 from pydantic import Field
 
 from snakesim.components.control.robot_source import RobotSource, link_names

@@ -30,7 +30,6 @@ import numpy as np
 
 from snakesim.components.terrain import (FourierCylinder, HeightField, Moulin, ParallelWalls, PlaneTerrain,
                                          SdfGrid, Terrain, UChannel)
-from snakesim.components.terrain.base import frame_from_axis
 
 ICE = np.array([[214, 232, 244], [186, 212, 232]], dtype=np.uint8)   # checker tones, RGB
 DEM_LOW, DEM_HIGH = np.array([120, 160, 200.0]), np.array([240, 248, 255.0])

@@ -12,7 +12,6 @@ import numpy as np
 import pytest
 
 from snakesim.framework import Component, Input, Output, Params
-from snakesim.framework.plan import build
 from snakesim.framework.registry import build_registry
 from snakesim.framework.session import load_session
 from snakesim.framework.simulator import Simulator

@@ -1,6 +1,5 @@
 """Shape fit: the fitted robot's bend points lie on the target curve (checked through the multibody's own FK)."""
 
-import math
 from types import SimpleNamespace
 
 import numpy as np

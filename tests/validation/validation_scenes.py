@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from snakesim.framework.session import Session, load_session
+from snakesim.framework.session import Session
 from snakesim.framework.assembly import resolve
 from snakesim.framework.registry import default_registry
 
