@@ -219,8 +219,10 @@ def _draw_links(ax, lay: Layout, patches: dict) -> None:
             ts = [1 - (rt + k * 0.25) / dd for k in range(1, int((dd - rs - rt) / 0.25))]
             cands = [_bezier_point(src.center, dst.center, -rad, t) for t in ts if 0.02 < t < 0.98]
             movable.append((cands or [on_arc(src, dst, rad)], _oriented(lk, left.name), greyed))
-        else:
-            fixed.append((*on_arc(src, dst, rad), _oriented(lk, left.name), greyed))
+        else:     # mid-arrow unless that collides (crossing arrows): then a free spot along it
+            cands = [on_arc(src, dst, rad)] + [_bezier_point(src.center, dst.center, -rad, t)
+                                               for t in (0.38, 0.62, 0.3, 0.7)]
+            movable.append((cands, _oriented(lk, left.name), greyed))
 
     taken = [(b.x, b.y, b.x + b.w, b.y + b.h) for b in boxes.values()]
 
