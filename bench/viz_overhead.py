@@ -1,15 +1,16 @@
 """What the rerun viewer sink costs a robot simulation: real-time factor with and without it.
 
     .venv/bin/python bench/viz_overhead.py [--scene contact-screw-drive] [--modules 4,10] [--duration 3]
-                                           [--repeats 3] [--json FILE]
+                                           [--repeats 3] [--integrator NAME] [--configs none,viz,unbatched]
+                                           [--json FILE]
 
 For each module count the scene runs (same session, same steps) in three
 configurations, each the best of ``--repeats`` runs after one warm-up:
 
   none        no viewer
-  viz         ``--viz save FILE.rrd`` as the CLI adds it: 30 Hz frames, link
-              transforms and signal plots batched by send_columns (30 frames),
-              contacts logged per frame
+  viz         ``--viz save FILE.rrd`` as the CLI adds it: 30 Hz frames; link
+              transforms, signal plots and contacts batched by send_columns
+              (2 s of frames per batch when saving)
   unbatched   the same with flush_frames = 1 (one send_columns per entity per
               frame): what batching saves
 
@@ -37,21 +38,23 @@ from snakesim.framework.session import Session
 CONFIGS = ("none", "viz", "unbatched")
 
 
-def _session(scene: str, modules: int, duration: float, config: str, rrd: Path, reg) -> Session:
-    r = resolve(scene, search_path=reg.assembly_paths(), overrides=[f"robot.modules={modules}"],
-                sim_overrides={"duration": duration})
+def _session(scene: str, modules: int, duration: float, config: str, rrd: Path, reg,
+             integrator: str | None = None) -> Session:
+    sim = {"duration": duration} | ({"integrator": integrator} if integrator else {})
+    r = resolve(scene, search_path=reg.assembly_paths(), overrides=[f"robot.modules={modules}"], sim_overrides=sim)
     if config != "none":
         attach_viewer(r, VizTarget("save", str(rrd)), reg,
                       params={"flush_frames": 1} if config == "unbatched" else None)
     return Session(r, reg)
 
 
-def measure(scene: str, modules: int, duration: float, repeats: int, tmp: Path, reg) -> list[dict]:
+def measure(scene: str, modules: int, duration: float, repeats: int, tmp: Path, reg,
+            integrator: str | None = None, configs=CONFIGS) -> list[dict]:
     rows = []
     base_wall = None
-    for config in CONFIGS:
+    for config in configs:
         rrd = tmp / f"{config}-{modules}.rrd"
-        s = _session(scene, modules, duration, config, rrd, reg)
+        s = _session(scene, modules, duration, config, rrd, reg, integrator)
         s.run()                                            # warm-up: caches, first recording
         walls, summary = [], None
         for _ in range(repeats):
@@ -80,8 +83,11 @@ def measure(scene: str, modules: int, duration: float, repeats: int, tmp: Path, 
 @click.option("--modules", default="4,10", help="Comma-separated module counts.")
 @click.option("--duration", default=3.0, type=float, help="Simulated s per run.")
 @click.option("--repeats", default=3, type=int, help="Timed runs per configuration (best counts).")
+@click.option("--integrator", default=None, help="Override sim.integrator (e.g. semi_implicit_euler).")
+@click.option("--configs", default=",".join(CONFIGS), help=f"Comma-separated subset of {', '.join(CONFIGS)} "
+              "(none first: the others are measured against it).")
 @click.option("--json", "json_path", type=click.Path(dir_okay=False), help="Write the figures here.")
-def main(scene, modules, duration, repeats, json_path):
+def main(scene, modules, duration, repeats, integrator, configs, json_path):
     reg = default_registry()
     if scene is None:
         names = {Path(str(p)).stem for d in reg.assembly_paths() for p in Path(str(d)).glob("*.yaml")}
@@ -89,8 +95,9 @@ def main(scene, modules, duration, repeats, json_path):
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for m in (int(s) for s in modules.split(",")):
-            rows += measure(scene, m, duration, repeats, Path(tmp), reg)
-    click.echo(f"scene {scene}, {duration:g} s simulated per run, best of {repeats}")
+            rows += measure(scene, m, duration, repeats, Path(tmp), reg, integrator, configs.split(","))
+    click.echo(f"scene {scene}, {duration:g} s simulated per run, best of {repeats}"
+               + (f", integrator {integrator}" if integrator else ""))
     click.echo(f"{'modules':>7} {'config':<10} {'wall s':>8} {'RTF':>7} {'frames':>6} {'overhead':>9} "
                f"{'µs/frame':>9} {'rrd MB':>7}")
     for r in rows:

@@ -123,33 +123,50 @@ class Plan:
         self._manifold = [s for s in self.slices if s.manifold]
         self._lie = [s for s in self._manifold if type(s.comp).dexp_inv is not Component.dexp_inv]
 
-    def sample_at_record_ticks(self, recorded, stopped, every: int) -> list[str]:
-        """A ``calc`` group read by nothing but the recorder runs on recording ticks only.
+    def sample_at_reader_ticks(self, recorded, stopped, record_every: int) -> dict[str, int]:
+        """A ``calc`` group read only by sampled readers runs only when one of them reads.
 
-        Its outputs are held between ticks, which nobody can observe: the
-        recorder reads them exactly when they are fresh. Returns the groups
-        so sampled (for the report).
+        Readers that sample: discrete components (a rate), sinks, and the recorder
+        (every ``record_every`` steps). If every reader of a group samples, the group
+        runs every g steps, g the gcd of their periods: each reader then sees a fresh
+        value, and nobody can observe the held one in between (the viewer reading a
+        contact set at 30 Hz, the recorder reading a pose at 50 Hz). Groups a stop
+        condition tests, or a continuous component reads, keep running every step.
+        Returns {group: period} (also in the report).
         """
-        if every == 1:
-            return []
-        read = set(self.sources.values()) | set(stopped)
-        rec = set(recorded)
+        readers: dict[PortRef, list[int]] = defaultdict(list)
+        for dst, src in self.sources.items():
+            c = self.components[dst.comp]
+            sampling = c.rate is not None or c.is_sink
+            readers[src].append(round(1.0 / (c.rate * self.dt)) if c.rate else 1 if sampling else 0)
+        for ref in recorded:
+            readers[ref].append(record_every)
+        stop = set(stopped)
         sampled = []
         for node, _ in self.calls:
+            if node.method == node.comp.output or node.period != 1:
+                continue
             refs = [PortRef(node.comp.name, p) for p in node.ports]
-            if (node.method != node.comp.output and node.period == 1 and not any(r in read for r in refs)
-                    and any(r in rec for r in refs)):
-                sampled.append(node)
-        n = self.n_phases * every // math.gcd(self.n_phases, every)
+            periods = [p for r in refs for p in readers.get(r, ())]
+            if not periods or 0 in periods or any(r in stop for r in refs):
+                continue                       # unread, read every stage, or stop-tested
+            g = 0
+            for p in periods:
+                g = math.gcd(g, p)
+            if g > 1:
+                sampled.append((node, g))
+        n = self.n_phases
+        for _, g in sampled:
+            n = n * g // math.gcd(n, g)
         if not sampled or n > MAX_PHASES:
-            return []
-        for node in sampled:
-            node.period = every
+            return {}
+        for node, g in sampled:
+            node.period = g
         self.updates[:] = [self.updates[p % self.n_phases] for p in range(n)]
         self.n_phases = n
         self.major[:] = _major_lists(self.calls, n, self.used)
-        labels = [node.label() for node in sampled]
-        self.report["sampled_at_record_rate"] = labels
+        labels = {node.label(): g for node, g in sampled}
+        self.report["sampled_output_groups"] = labels
         return labels
 
     @property

@@ -108,7 +108,7 @@ class Simulator:
                 raise BuildError(f"sim.record_rate {record_rate:g} Hz is not an integer number of base steps "
                                  f"(dt = {dt:g} s); valid: {1 / dt:g}/k Hz")
             self.record_every = n
-        plan.sample_at_record_ticks(self.record_refs, stopped, self.record_every)
+        plan.sample_at_reader_ticks(self.record_refs, stopped, self.record_every)
         # every run starts from the initial state (one session, many runs)
         self.X0, self.XD0 = plan.X.copy(), plan.XD.copy()
 

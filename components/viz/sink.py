@@ -29,7 +29,8 @@ First frame: opens the recording (:func:`.target.open_recording`: headless
 machines never spawn a window), logs the static meshes. Every frame: link
 transforms, series values, the real-time factor, contacts, attraction arrows
 and tethers are queued and sent in ``send_columns`` batches
-(:class:`.scene_log.SceneLog`). Everything is sent and the file closed at ``t_end``,
+(:class:`.scene_log.SceneLog`) of 1 s of frames to a live viewer, 2 s to a
+file (``flush_frames``). Everything is sent and the file closed at ``t_end``,
 on :meth:`close`, or at interpreter exit. A later run of the same instance
 (time going back) starts a new recording. Entity layout and the physical /
 ornamental contract: :mod:`.entities`.
@@ -54,6 +55,8 @@ from .robot_geometry import RobotSource, link_meshes, load_source
 from .target import VizTargetError, open_recording, parse_target
 
 Vec3 = tuple[float, float, float]
+LIVE_FLUSH_S = 1.0       # simulated s of frames per send_columns batch to a live viewer
+SAVE_FLUSH_S = 2.0       # ... to an .rrd file
 
 
 class RerunSinkParams(Params):
@@ -79,7 +82,8 @@ class RerunSinkParams(Params):
     series: list[str] = Field(default_factory=list, description="'comp.port' plotted from inputs s0, s1, ...")
     tether_lines: list[dict] = Field(default_factory=list,
                                      description="[{link, offset, anchor}]: straight ropes drawn from link_poses")
-    flush_frames: int = Field(30, ge=1, description="frames per send_columns batch")
+    flush_frames: int | None = Field(None, ge=1, description="frames per send_columns batch; default "
+                                     "1 s of frames live (spawn, serve), 2 s when saving")
     t_end: float | None = Field(None, description="s: send everything and close at this time")
 
     @field_validator("target")
@@ -141,6 +145,9 @@ class RerunSink(Component[RerunSinkParams]):
         import rerun.blueprint  # noqa: F401
 
         self._meshes = link_meshes(RobotSource.of(p)) if self.links else []
+        from .scene_log import link_visuals
+
+        self._visuals = link_visuals(self._meshes)    # arrow conversion once, not per recording
         self._log = None
         self._finalizer = None
         self._last_t = -np.inf
@@ -195,13 +202,21 @@ class RerunSink(Component[RerunSinkParams]):
         from .scene_log import SceneLog
 
         self._log = SceneLog(rec, robot=p.robot_component, link_names=self.links, meshes=self._meshes, series=series,
+                             visuals=self._visuals,
                              body_frames=p.body_frames, frame_length=p.frame_length, force_scale=p.force_scale,
-                             flush_frames=p.flush_frames, contacts=self._has_contacts,
+                             flush_frames=self._flush_frames(), contacts=self._has_contacts,
                              attraction=self._has_attraction,
                              tethers=self._has_tethers or self._ropes is not None)
         self._log.log_static(tmesh)
         self._finalizer = weakref.finalize(self, _finish, self._log, rec, self.used_target.mode)
         self._last_wall = time.perf_counter()
+
+    def _flush_frames(self) -> int:
+        # a live viewer wants to see the run move; a file only pays per send_columns call
+        if self.p.flush_frames is not None:
+            return self.p.flush_frames
+        seconds = SAVE_FLUSH_S if self.used_target.mode == "save" else LIVE_FLUSH_S
+        return max(1, round(seconds / self._period))
 
     def close(self) -> None:
         """Send what is queued and close the recording (idempotent)."""

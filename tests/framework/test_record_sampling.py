@@ -50,7 +50,7 @@ def test_record_only_group_runs_on_record_ticks(record_rate, expected_calls):
     assert Clock.calls == expected_calls          # 100 steps: ticks 0..100, or every 10th
     t = r["t"]
     np.testing.assert_allclose(r["c.square"], t * t, rtol=1e-12, atol=1e-15)   # fresh when recorded
-    assert ("c[square]" in s.report().get("sampled_at_record_rate", [])) == (record_rate is not None)
+    assert s.report().get("sampled_output_groups", {}).get("c[square]") == (10 if record_rate else None)
 
 
 def test_a_stop_tested_group_is_not_sampled():
@@ -61,7 +61,7 @@ def test_a_stop_tested_group_is_not_sampled():
     r = s.run()
     # checked every step on a fresh value: the first tick with x > 0.505 is t = 0.51 (x = t)
     assert r.summary["t_end_s"] == pytest.approx(0.51)
-    assert "sampled_at_record_rate" not in s.report()
+    assert "sampled_output_groups" not in s.report()
 
 
 def test_time_invariant_component_is_evaluated_once_per_run():
@@ -134,3 +134,40 @@ def test_derivative_follows_output_on_the_same_state(integrator):
                         record=[("d.x", None)], stop=[])
     Session(resolved, reg).run()
     assert len(seen) >= 5 and all(seen)
+
+
+def test_group_read_only_by_a_discrete_component_runs_at_its_ticks():
+    """A 10 Hz sampler (period 10 steps) is the only reader of c.square: the group runs on
+    the sampler's ticks only, and every sample it takes is fresh (x² at that tick)."""
+    from snakesim.framework import Input
+
+    class Sampler(Component[Params]):
+        type_name = "test_sampler"
+        u = Input()
+        y = Output(feedthrough=())
+
+        def discrete_state(self):
+            return np.zeros(1)
+
+        def output(self, t, x, u, y):
+            y.y[...] = x[0]
+
+        def update(self, t, xd, u):
+            xd[0] = u.u
+
+    reg = build_registry()
+    reg.add_component(Clock)
+    reg.add_component(Sampler)
+    resolved = Resolved(sim=SimSpec(duration=1.0, dt=0.01, integrator="rk4"), parameters={},
+                        components={"c": ComponentSpec(type="test_clock"),
+                                    "s": ComponentSpec(type="test_sampler", rate=10.0)},
+                        connections=[("c.square", "s.u", None)], record=[("s.y", None), ("c.x", None)], stop=[])
+    s = Session(resolved, reg)
+    Clock.calls = 0
+    r = s.run()
+    assert Clock.calls == 11
+    assert s.report()["sampled_output_groups"] == {"c[square]": 10}
+    t, y = r["t"], r["s.y"]
+    # held sample: at a tick k*0.1 the output shows the previous sample ((k-1)*0.1)²
+    ticks = np.isclose(np.mod(t + 1e-9, 0.1), 0.0, atol=1e-6) & (t > 0.05)
+    np.testing.assert_allclose(y[ticks], (t[ticks] - 0.1) ** 2, rtol=1e-9, atol=1e-12)
