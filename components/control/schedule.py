@@ -17,6 +17,18 @@ from pydantic import Field, model_validator
 from snakesim.framework import Component, Output, Params
 
 
+def check_switch_times(times, entries, what: str) -> None:
+    """A schedule's switch times: one per entry of ``what``, finite, strictly increasing."""
+    if len(times) != len(entries):
+        raise ValueError(f"times has {len(times)} entries but {what} has {len(entries)}")
+    t = np.asarray(times, dtype=float)
+    if not np.all(np.isfinite(t)):
+        raise ValueError(f"times must be finite, got {times}")
+    if t.size > 1 and not np.all(np.diff(t) > 0):
+        i = int(np.flatnonzero(np.diff(t) <= 0)[0])
+        raise ValueError(f"times must increase strictly: times[{i}] = {t[i]:g} >= times[{i + 1}] = {t[i + 1]:g}")
+
+
 class ScheduleParams(Params):
     times: list[float] = Field(default_factory=list, description="switch times, s, strictly increasing")
     values: list[float | list[float]] = Field(default_factory=list, description="value from each switch time on")
@@ -24,14 +36,7 @@ class ScheduleParams(Params):
 
     @model_validator(mode="after")
     def _check(self):
-        if len(self.times) != len(self.values):
-            raise ValueError(f"times has {len(self.times)} entries but values has {len(self.values)}")
-        t = np.asarray(self.times, dtype=float)
-        if not np.all(np.isfinite(t)):
-            raise ValueError(f"times must be finite, got {self.times}")
-        if t.size > 1 and not np.all(np.diff(t) > 0):
-            i = int(np.flatnonzero(np.diff(t) <= 0)[0])
-            raise ValueError(f"times must increase strictly: times[{i}] = {t[i]:g} >= times[{i + 1}] = {t[i + 1]:g}")
+        check_switch_times(self.times, self.values, "values")
         sizes = {np.size(v) for v in [*self.values, self.initial]}
         if len(sizes - {1}) > 1:
             raise ValueError(f"values and initial must all have one length (or be scalars), got lengths {sorted(sizes)}")

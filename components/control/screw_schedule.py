@@ -27,6 +27,7 @@ from pydantic import Field, model_validator
 
 from snakesim.framework import Component, Output
 
+from .schedule import check_switch_times
 from .robot_source import RobotSource, finite_or_raise, joint_kind, joint_names, per_joint
 
 GROUPS = ("all", "tail_half", "head_half")
@@ -41,14 +42,7 @@ class ScrewScheduleParams(RobotSource):
 
     @model_validator(mode="after")
     def _check(self):
-        if len(self.times) != len(self.speeds):
-            raise ValueError(f"times has {len(self.times)} entries but speeds has {len(self.speeds)}")
-        t = np.asarray(self.times, dtype=float)
-        if not np.all(np.isfinite(t)):
-            raise ValueError(f"times must be finite, got {self.times}")
-        if t.size > 1 and not np.all(np.diff(t) > 0):
-            i = int(np.flatnonzero(np.diff(t) <= 0)[0])
-            raise ValueError(f"times must increase strictly: times[{i}] = {t[i]:g} >= times[{i + 1}] = {t[i + 1]:g}")
+        check_switch_times(self.times, self.speeds, "speeds")
         return self
 
 
