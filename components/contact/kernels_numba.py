@@ -66,22 +66,25 @@ def contact_forces_nb(depth, normal, velocity, e_dir, stiffness, damping, mu, ev
         out_force[i, 0], out_force[i, 1], out_force[i, 2] = fx, fy, fz
 
 
+@njit(cache=True, inline="always")
+def add_wrench(out_wrench, b, rx, ry, rz, fx, fy, fz):
+    """out_wrench[b] += [f, r × f]: force f applied at r from body b's origin (world frame)."""
+    out_wrench[b, 0] += fx
+    out_wrench[b, 1] += fy
+    out_wrench[b, 2] += fz
+    out_wrench[b, 3] += ry * fz - rz * fy
+    out_wrench[b, 4] += rz * fx - rx * fz
+    out_wrench[b, 5] += rx * fy - ry * fx
+
+
 @njit(cache=True)
 def body_wrenches_nb(points, forces, origins, body_index, out_wrench):
     """out_wrench[b] = Σ_{i: body_index[i] = b} [f_i, (p_i − o_b) × f_i] (world frame)."""
     out_wrench[:, :] = 0.0
     for i in range(points.shape[0]):
         b = body_index[i]
-        rx = points[i, 0] - origins[b, 0]
-        ry = points[i, 1] - origins[b, 1]
-        rz = points[i, 2] - origins[b, 2]
-        fx, fy, fz = forces[i, 0], forces[i, 1], forces[i, 2]
-        out_wrench[b, 0] += fx
-        out_wrench[b, 1] += fy
-        out_wrench[b, 2] += fz
-        out_wrench[b, 3] += ry * fz - rz * fy
-        out_wrench[b, 4] += rz * fx - rx * fz
-        out_wrench[b, 5] += rx * fy - ry * fx
+        add_wrench(out_wrench, b, points[i, 0] - origins[b, 0], points[i, 1] - origins[b, 1],
+                   points[i, 2] - origins[b, 2], forces[i, 0], forces[i, 1], forces[i, 2])
 
 
 def contact_forces_numba(depth, normal, velocity, e_dir, stiffness, damping, mu, ev_a=1.0, ev_b=0.0,

@@ -76,6 +76,12 @@ class MaterialOverride(Params):
     ev_a: float | None = Field(None, description="‖e_v‖ at zero normal force")
     ev_b: float | None = Field(None, description="1/N, d‖e_v‖/dF_n")
 
+    def table(self, materials) -> np.ndarray:
+        """[k, c, mu, ev_a, ev_b] per terrain material, with this override applied."""
+        own = (self.k, self.c, self.mu, self.ev_a, self.ev_b)
+        return np.array([[v if o is None else o for v, o in zip((m.k, m.c, m.mu, m.ev_a, m.ev_b), own)]
+                         for m in materials], dtype=np.float64)
+
 
 class ScrewSdfContactParams(RobotSource):
     rings: int = Field(3, ge=1, description="rings of samples per screw, spread over its length")
@@ -149,14 +155,7 @@ class ScrewSdfContact(Component[ScrewSdfContactParams]):
 
     def _material_table(self, terrain: Terrain) -> np.ndarray:
         if terrain is not self._terrain:
-            o = self.p.material
-            rows = []
-            for m in terrain.materials:
-                row = [m.k, m.c, m.mu, m.ev_a, m.ev_b]
-                if o is not None:
-                    row = [v if ov is None else ov for v, ov in zip(row, (o.k, o.c, o.mu, o.ev_a, o.ev_b))]
-                rows.append(row)
-            self._terrain, self._mats = terrain, np.array(rows, dtype=np.float64)
+            self._terrain, self._mats = terrain, (self.p.material or MaterialOverride()).table(terrain.materials)
             self._plane_call = None
             # planes are queried in numba (no allocation); every other kind through Terrain.query
             self._plane = None

@@ -16,7 +16,7 @@ import math
 
 from numba import njit
 
-from .kernels_numba import point_contact_force
+from .kernels_numba import add_wrench, point_contact_force
 
 K, C, MU, EV_A, EV_B = range(5)
 
@@ -142,13 +142,7 @@ def contact_wrenches(m, distance, normal, material, sample, owner, poses, vels, 
         out_force[i, 0], out_force[i, 1], out_force[i, 2] = fx, fy, fz
         out_screw_fn[s] += fn
         o = screw_row[s]
-        rx, ry, rz = px - poses[o, 0], py - poses[o, 1], pz - poses[o, 2]
-        out_wrench[o, 0] += fx
-        out_wrench[o, 1] += fy
-        out_wrench[o, 2] += fz
-        out_wrench[o, 3] += ry * fz - rz * fy
-        out_wrench[o, 4] += rz * fx - rx * fz
-        out_wrench[o, 5] += rx * fy - ry * fx
+        add_wrench(out_wrench, o, px - poses[o, 0], py - poses[o, 1], pz - poses[o, 2], fx, fy, fz)
     return n_contact
 
 

@@ -11,14 +11,12 @@ axisymmetric about their spin axis, as the hardware's are.
 
 from __future__ import annotations
 
-import textwrap
 
 import numpy as np
 import pytest
 
 from snakesim.framework import Component, Input, Output, Params
 from snakesim.framework.registry import build_registry
-from snakesim.framework.session import load_session
 
 HEAD_COM = (0.06, 0.01, -0.02)
 
@@ -120,21 +118,6 @@ def registry():
     reg = build_registry(load_entry_points=False)
     reg.add_component(AnchorSpring)
     return reg
-
-
-@pytest.fixture
-def run_scene(tmp_path, registry):
-    """run_scene(yaml_text, **files) -> RunResult; files are written next to the scene first."""
-
-    def run(text: str, **files: str):
-        for name, content in files.items():
-            (tmp_path / name).write_text(content)
-        path = tmp_path / "scene.yaml"
-        path.write_text(textwrap.dedent(text).lstrip("\n"))
-        session = load_session(path, registry=registry)
-        return session, session.run()
-
-    return run
 
 
 def random_state(model, rng, spread=1.5):

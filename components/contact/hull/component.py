@@ -224,14 +224,7 @@ class HullContact(Component[HullContactParams]):
         return np.where((hand != 0)[:, None], e, 0.0)
 
     def _materials(self, terrain):
-        o = self.p.material
-        out = []
-        for m in terrain.materials:
-            row = [m.k, m.c, m.mu, m.ev_a, m.ev_b]
-            if o is not None:
-                row = [v if ov is None else ov for v, ov in zip(row, (o.k, o.c, o.mu, o.ev_a, o.ev_b))]
-            out.append(row)
-        return out
+        return (self.p.material or MaterialOverride()).table(terrain.materials)
 
     def output(self, t, x, u, y):
         p = self.p
