@@ -50,9 +50,10 @@ def _time_call(fn, budget=0.2):
 
 
 def _robot_outputs(modules, z):
+    """(the multibody's RobotModel, its outputs) for eels-1.0 + head lying at height z, screws spinning."""
     mb = Harness(Multibody, {"design": "eels-1.0", "modules": modules, "head": True, "base_position": (0, 0, z),
                              "v0": {"screw_front_*": 2.0}})
-    return mb.outputs()
+    return mb.c.robot, mb.outputs()
 
 
 def evaluation_costs(modules=10, rings=3, per_ring=8):
@@ -63,9 +64,9 @@ def evaluation_costs(modules=10, rings=3, per_ring=8):
                                   ("on ice, no broad phase", 0.0898, False, True),
                                   ("2 m above, broad phase", 2.0, True, True),
                                   ("2 m above, no broad phase", 2.0, False, True)]:
-        out = _robot_outputs(modules, z)
-        h = Harness(ScrewSdfContact, {"design": "eels-1.0", "modules": modules, "head": True, "rings": rings,
-                                      "per_ring": per_ring, "broad_phase": broad})
+        robot, out = _robot_outputs(modules, z)
+        h = Harness(ScrewSdfContact, {"rings": rings, "per_ring": per_ring, "broad_phase": broad},
+                    uses={"robot": robot})
         h.c.fast_plane = fast
         h.inputs.terrain = terrain
         h.inputs.link_poses, h.inputs.link_velocities = out["link_poses"], out["link_velocities"]
@@ -84,8 +85,8 @@ def hull_costs(modules=10):
         return None
     try:
         cls = reg.components["hull_contact"]
-        out = _robot_outputs(modules, 0.0898)
-        h = Harness(cls, {"design": "eels-1.0", "modules": modules, "head": True})
+        robot, out = _robot_outputs(modules, 0.0898)
+        h = Harness(cls, {}, uses={"robot": robot})
         h.inputs.terrain = load_terrain("flat-ice")
         for name, key in (("link_poses", "link_poses"), ("link_velocities", "link_velocities"), ("joint_v", "joint_v")):
             if name in cls.inputs:

@@ -44,13 +44,13 @@ def _best(fn, repeat=5):
     return min(t.repeat(repeat=repeat, number=number)) / number
 
 
-def backends(robot):
+def backends():
     from snakesim.components.contact.screw_sdf import ScrewSdfContact
 
     return {
-        "hull": (HullContact, dict(robot, cylinder_slices=3)),
-        "hull-blades": (HullContact, dict(robot, screw_geometry="blades", blade_hulls=8)),
-        "sdf": (ScrewSdfContact, dict(robot, rings=3, per_ring=8)),
+        "hull": (HullContact, dict(cylinder_slices=3)),
+        "hull-blades": (HullContact, dict(screw_geometry="blades", blade_hulls=8)),
+        "sdf": (ScrewSdfContact, dict(rings=3, per_ring=8)),
     }
 
 
@@ -59,20 +59,19 @@ def backends(robot):
 @click.option("--modules", default=4, show_default=True)
 @click.option("--json", "json_path", type=click.Path(dir_okay=False), help="Also write the results here.")
 def main(design, modules, json_path):
-    robot = {"design": design, "modules": modules}
-    mb = Harness(Multibody, robot)
+    mb = Harness(Multibody, {"design": design, "modules": modules})
+    robot = mb.c.robot                      # the RobotModel every back end is handed
     o = mb.outputs()
     poses0, vel = o["link_poses"].copy(), np.zeros_like(o["link_velocities"])
-    tree = mb.c._layout.tree
+    tree = robot.tree
     mass = sum(ln.mass for ln in tree.links)
     com_x = sum(ln.mass * (poses0[i, 0] + ln.com[0]) for i, ln in enumerate(tree.links)) / mass
     weight = mass * 9.81
     terrain = load_terrain("flat-ice")
-    radius = max(s["radius"] for s in __import__("snakesim.robots", fromlist=["load_robot"]).load_robot(
-        design, modules=modules).metadata["screws"])
+    radius = max(s["radius"] for s in robot.metadata["screws"])
 
     def make(cls, params):
-        h = Harness(cls, params)
+        h = Harness(cls, params, uses={"robot": robot})
         h.inputs.terrain = terrain
         h.inputs.link_velocities = vel
         return h
@@ -91,7 +90,7 @@ def main(design, modules, json_path):
         return cs.points, cs.normal_force
 
     rows, z_hull = [], None
-    for name, (cls, params) in backends(robot).items():
+    for name, (cls, params) in backends().items():
         h = make(cls, params)
         lo, hi = radius - 0.01, radius            # Σ F_n falls from ≫ W to 0 over [lo, hi]
         for _ in range(60):
@@ -110,7 +109,7 @@ def main(design, modules, json_path):
                      "normal_force_N": float(y["normal_force"][0]), "cop_minus_com_mm": (cop - com_x) * 1e3,
                      "x_first_m": float(pts[on, 0].min()), "x_last_m": float(pts[on, 0].max()),
                      "us_per_call_contact": t_contact * 1e6, "us_per_call_free": t_free * 1e6})
-    for r, (name, (cls, params)) in zip(rows, backends(robot).items()):
+    for r, (name, (cls, params)) in zip(rows, backends().items()):
         r["fn_over_weight_at_hull_z"] = float(at(make(cls, params), z_hull)["normal_force"][0] / weight)
 
     click.echo(f"{design}, {modules} modules, mass {mass:.2f} kg, weight {weight:.1f} N, flat ice k = "

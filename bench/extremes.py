@@ -53,7 +53,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "validati
 from validation_scenes import run, session  # noqa: E402
 
 from snakesim.components.control.pid import DEFAULT_GAINS  # noqa: E402
-from snakesim.components.control.robot_source import joint_kind  # noqa: E402
+from snakesim.components.multibody.robot_model import joint_kind  # noqa: E402
 from snakesim.framework.assembly import StopSpec  # noqa: E402
 
 INTEGRATORS = {"semi_implicit_euler": {}, "rk4": {}, "dopri5": {"rtol": 1e-4, "atol": 1e-6},
@@ -101,7 +101,7 @@ def tracking_failure(s, r) -> str | None:
     pid = s.plan.components["pid"]
     if pid.p.gains or pid.p.kind_gains:
         raise ValueError("tracking check assumes the PID's built-in gains (screws velocity, others position)")
-    joints = s.plan.components["robot"].joint_names      # the PID's order too: one robot source
+    joints = s.plan.components["robot"].robot.joints      # the PID's order too: one robot source
     velocity = np.array([DEFAULT_GAINS[joint_kind(j)]["mode"] == "velocity" for j in joints])
     t, sp, err = np.asarray(r["t"]), np.asarray(r["phases.setpoint"]), np.abs(np.asarray(r["pid.error"]))
     new = np.r_[True, np.any(sp[1:] != sp[:-1], axis=1)]               # a setpoint first seen here
@@ -214,9 +214,9 @@ def apparent_inertias(sets) -> tuple[np.ndarray, list[str], float]:
     model, data = robot.dyn.model, robot.dyn.data
     m = pin.crba(model, data, robot._x0[:model.nq])       # upper triangle, armature on the diagonal
     m = np.triu(m) + np.triu(m, 1).T
-    dof = np.array([model.joints[model.getJointId(j)].idx_v for j in robot.joint_names])
+    dof = np.array([model.joints[model.getJointId(j)].idx_v for j in robot.robot.joints])
     apparent = 1.0 / np.diag(np.linalg.inv(m))[dof]
-    return apparent, list(robot.joint_names), float(sum(robot.armature_user.values()))
+    return apparent, list(robot.robot.joints), float(sum(robot.armature_user.values()))
 
 
 def loop_poles(kind: str, inertia: float) -> np.ndarray:

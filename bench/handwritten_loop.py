@@ -84,7 +84,7 @@ class HandLoop:
         mb, pid, sc, c = self.mb, self.pid, self.sched, self.contact
         ta, lay = mb._ta, c.layout
         model, data = mb.dyn.model, mb.dyn.data
-        nq, nv, nl, nj = mb._nq, mb._nv, len(mb.link_names), len(mb.joint_names)
+        nq, nv, nl, nj = mb._nq, mb._nv, len(mb.robot.links), len(mb.robot.joints)
         x = self.X0["robot"].copy()
         xp = self.X0["pid"].copy()
         q, v = x[:nq].copy(), x[nq:].copy()

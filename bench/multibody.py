@@ -61,9 +61,9 @@ def _time(dyn, budget):
 def measure(design: str, modules: int, budget: float) -> dict:
     h = Harness(Multibody, {"design": design, "modules": modules}, name="robot")
     c = h.c
-    tree, arm = c._layout.tree, c.armature_user
+    tree, arm = c.robot.tree, c.armature_user
     opt = c.dyn
-    mm = build_dynamics(tree, "mimic_crba", arm, c._layout.groups) if c.mode == "embedded" else \
+    mm = build_dynamics(tree, "mimic_crba", arm, c.robot.groups) if c.mode == "embedded" else \
         type(opt)("mimic_crba", opt.model, opt.model.createData(), [])
     base = baseline_models(tree, arm)
     # the two optimised paths agree (exactness of the embedding) before we time them
@@ -80,7 +80,7 @@ def measure(design: str, modules: int, budget: float) -> dict:
     h.x[opt.model.nq:] = v
     dx = np.zeros(h.ndx)
     row["component_us"] = time_call(lambda: c.derivative(0.0, h.x, h.u, dx), budget, BATCHES)
-    h.inputs.wrenches = np.ones((len(c.link_names), 6))
+    h.inputs.wrenches = np.ones((len(c.robot.links), 6))
     row["component_wrench_us"] = time_call(lambda: (setattr(c, "_kin_key", None), c.derivative(0.0, h.x, h.u, dx)), budget,
                                            BATCHES)
     for k in ("aba", "mm", "component"):

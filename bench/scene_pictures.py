@@ -27,7 +27,7 @@ def draw(scene, horizon, out: Path):
     import matplotlib.pyplot as plt
 
     s, r = run(scene, [], {"duration": horizon})
-    names = s.plan.components["robot"].link_names
+    names = s.plan.components["robot"].robot.links
     keep = [i for i, n in enumerate(names) if n.startswith(("tail", "module_", "knuckle_", "screw_"))]
     P = np.asarray(r["robot.link_poses"]).reshape(len(r["t"]), len(names), 7)[:, :, :3]
     t = np.asarray(r["t"])

@@ -11,6 +11,7 @@ from .errors import BuildError, ConfigError, RegistryError, SnakesimError
 from .harness import Harness
 from .hookspecs import hookimpl
 from .ports import Input, Output
+from .resources import Provides, Uses
 
-__all__ = ["Cell", "Component", "ContinuousState", "Params", "Input", "Output", "Harness", "hookimpl",
+__all__ = ["Cell", "Component", "ContinuousState", "Params", "Input", "Output", "Uses", "Provides", "Harness", "hookimpl",
            "SnakesimError", "ConfigError", "BuildError", "RegistryError"]

@@ -6,7 +6,7 @@ An assembly file has these top-level keys (all optional)::
     parameters:  {name: default, ...}         # referenced as ${name} below
     sim:         {duration, dt, integrator, record_rate, realtime}
     include:     [{assembly: NAME, as: PREFIX, repeat: N, params: {...}}]
-    components:  {name: {type: TYPE, params: {...}, rate: HZ}}
+    components:  {name: {type: TYPE, params: {...}, rate: HZ, uses: {slot: PROVIDER}}}
     connections: ["a.y -> b.u", "a.y -> b.u, c.u", {connect: "...", repeat: N}]
     record:      ["a.y", ...]
     stop:        [{signal: a.y, index: 0, above: 1.0, reason: "..."}]
@@ -59,6 +59,8 @@ class ComponentSpec(_Strict):
     type: str
     params: dict = Field(default_factory=dict)
     rate: float | None = Field(None, gt=0, description="Hz, for discrete components")
+    uses: dict[str, str] = Field(default_factory=dict, description="resource slot -> providing component; "
+                                                                   "needed only when several provide one")
 
 
 class StopSpec(_Strict):
@@ -97,6 +99,8 @@ class Resolved:
             d = {"type": spec.type, "params": (full_params or {}).get(name, spec.params)}
             if spec.rate is not None:
                 d["rate"] = spec.rate
+            if spec.uses:
+                d["uses"] = dict(spec.uses)
             comps[name] = d
         return {
             "description": self.description,

@@ -12,7 +12,10 @@ as class attributes (see :mod:`.ports`) and up to five methods::
 ``x`` is the component's slice of the state the simulator owns (Drake's
 Context idea): the component object keeps parameters and derived constants
 only, so one instance can serve many runs. ``u`` reads inputs (zero-copy
-views of the upstream outputs), ``y`` holds the output buffers.
+views of the upstream outputs) and carries ``u.cache``, the per-run scratch
+the framework made with ``make_cache()``; ``y`` holds the output buffers.
+Build-time resources (the robot model) are declared with ``Uses`` and
+``Provides`` (:mod:`.resources`) and bound before ``setup()``.
 """
 
 from __future__ import annotations
@@ -24,6 +27,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict
 
 from .ports import Input, Output
+from .resources import Provides, Uses
 
 
 class Params(BaseModel):
@@ -81,17 +85,26 @@ class Component(Generic[P]):
     time_invariant: ClassVar[bool] = False
     inputs: ClassVar[dict[str, Input]] = {}
     outputs: ClassVar[dict[str, Output]] = {}
+    #: build-time resources (see :mod:`.resources`): needed from others / built for others
+    uses: ClassVar[dict[str, Uses]] = {}
+    provides: ClassVar[dict[str, Provides]] = {}
 
     def __init_subclass__(cls, **kw):
         super().__init_subclass__(**kw)
-        ins, outs = {}, {}
+        ins, outs, uses, provides = {}, {}, {}, {}
         for klass in reversed(cls.__mro__):
             for name, attr in vars(klass).items():
                 if isinstance(attr, Input):
                     ins[name] = attr
                 elif isinstance(attr, Output):
                     outs[name] = attr
-        cls.inputs, cls.outputs = ins, outs
+                elif isinstance(attr, Uses):
+                    uses[name] = attr
+                elif isinstance(attr, Provides):
+                    provides[name] = attr
+        cls.inputs, cls.outputs, cls.uses, cls.provides = ins, outs, uses, provides
+        if "cache" in ins:
+            raise TypeError(f"{cls.__name__}: 'cache' is reserved for u.cache; name the input otherwise")
         for name, port in outs.items():
             if port.calc is not None and not callable(getattr(cls, port.calc, None)):
                 raise TypeError(f"{cls.__name__}.{name}: calc method '{port.calc}' is not defined")
@@ -99,7 +112,8 @@ class Component(Generic[P]):
             if bad:
                 raise TypeError(f"{cls.__name__}.{name}: feedthrough names unknown inputs {bad}")
 
-    def __init__(self, name: str = "component", params: P | dict | None = None, rate: float | None = None):
+    def __init__(self, name: str = "component", params: P | dict | None = None, rate: float | None = None,
+                 uses: dict | None = None):
         self.name = name
         if params is None:
             params = {}
@@ -109,7 +123,28 @@ class Component(Generic[P]):
         self.rate = rate
         self._stop = StopFlag()
         self.used_outputs: frozenset[str] = frozenset(type(self).outputs)
+        self._bind_uses(uses or {})
         self.setup()
+        for slot, prov in type(self).provides.items():
+            obj = self.__dict__.get(slot)
+            if not isinstance(obj, prov.kind):
+                raise TypeError(f"{name}: setup() must set self.{slot} to a {prov.kind.__name__} "
+                                f"(it provides one), got {type(obj).__name__}")
+
+    def _bind_uses(self, given: dict) -> None:
+        cls = type(self)
+        unknown = [k for k in given if k not in cls.uses]
+        if unknown:
+            raise ValueError(f"{self.name}: given resource '{unknown[0]}', which it does not use; "
+                             f"it uses: {', '.join(cls.uses) or 'nothing'}")
+        for slot, use in cls.uses.items():
+            obj = given.get(slot)
+            if obj is None and use.required:
+                raise ValueError(f"{self.name}: needs a {use.kind.__name__} ('{slot}'); in an assembly the "
+                                 f"component that provides one binds it, alone pass uses={{'{slot}': ...}}")
+            if obj is not None and not isinstance(obj, use.kind):
+                raise TypeError(f"{self.name}: '{slot}' must be a {use.kind.__name__}, got {type(obj).__name__}")
+            setattr(self, slot, obj)
 
     # -- hooks a component overrides ------------------------------------------
     def setup(self) -> None:
@@ -139,6 +174,17 @@ class Component(Generic[P]):
         and skip them. Until a build calls this (a Harness), every output is used.
         """
         self.used_outputs = used
+
+    def make_cache(self, x, u, y):
+        """This run's scratch and precomputed kernel arguments (Drake's cache entries), or None.
+
+        Called by the build once, after ports are bound and ``bind_outputs``, with
+        this plan's state view ``x`` (None without state), inputs ``u`` and output
+        buffers ``y``: arrays there are never reallocated, so a kernel's argument
+        record can hold views of them. Every method then finds the result as
+        ``u.cache``. The component object itself keeps parameters and constants.
+        """
+        return None
 
     def derivative(self, t: float, x, u, dx) -> None:
         """dx/dt into ``dx``. Always called after ``output()`` on the same (t, x, u), so it may

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .binding import Cell, make_namespace
+from .binding import Cell, make_namespace, set_cache
 from .component import Component
 from .signals import Structured
 from .wiring import port_infos
@@ -28,9 +28,10 @@ class _InputSetter:
 
 class Harness:
     def __init__(self, component: Component | type[Component], params: dict | None = None,
-                 rate: float | None = None, name: str = "component"):
+                 rate: float | None = None, name: str = "component", uses: dict | None = None):
+        """``uses``: the resources the component needs, e.g. ``{"robot": RobotModel.load(design="eels-1.0")}``."""
         if isinstance(component, type):
-            component = component(name, params or {}, rate)
+            component = component(name, params or {}, rate, uses=uses)
         self.c = component
         self.infos = port_infos(component)
         self._in, self._in_cells, self._out, self._out_cells = {}, {}, {}, {}
@@ -56,6 +57,10 @@ class Harness:
         xd = component.discrete_state()
         self.xd = None if xd is None else np.array(xd, dtype=float).ravel()
         self.inputs = _InputSetter(self)
+        self._make_cache()
+
+    def _make_cache(self) -> None:
+        set_cache(self.u, self.c.make_cache(self.x if self.x is not None else self.xd, self.u, self.y))
 
     def set_input(self, name: str, value) -> None:
         if name in self._in_cells:
@@ -65,6 +70,7 @@ class Harness:
             if self.infos[name].shape is None and np.shape(value) != buf.shape:
                 buf = self._in[name] = np.array(value, dtype=buf.dtype)
                 self.u = make_namespace(self.c.name, "inputs", self._in, self._in_cells)
+                self._make_cache()
             else:
                 buf[...] = value
         else:

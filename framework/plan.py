@@ -1,10 +1,13 @@
 """Compile a resolved assembly into a flat, preallocated execution plan.
 
-Built once: instances, port buffers (inputs alias upstream outputs), state
+Built once, by one step that takes everything a run needs (components and
+their resources, connections, records, stop conditions, the record rate,
+sinks): instances, port buffers (inputs alias upstream outputs), state
 layout, a topological order of evaluation nodes, per-phase lists for the
-multi-rate discrete updates, and the set of components to prune. The step
-loop (:mod:`.simulator`) then only walks prebuilt lists of
-``(method, state view, inputs, outputs)`` tuples.
+multi-rate updates, the output groups sampled at their readers' ticks, and
+the set of components to prune. The plan is frozen: nothing changes it after
+:func:`build` returns. The step loop (:mod:`.simulator`) then only walks its
+prebuilt tuples of ``(method, state view, inputs, outputs)``.
 
 Evaluation nodes are (component, output group): the outputs without a
 ``calc`` method form one group computed by ``output()``, each ``calc`` port its
@@ -14,6 +17,7 @@ output never creates an algebraic loop.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections import defaultdict
 from dataclasses import dataclass, field
@@ -22,16 +26,17 @@ import numpy as np
 from pydantic import ValidationError
 
 from .assembly import Resolved
-from .binding import Cell, make_namespace
+from .binding import Cell, make_namespace, set_cache
 from .component import Component, StopFlag
 from .errors import BuildError, ConfigError
+from .rates import MAX_PHASES, lcm, period_of, phase_count
+from .resources import provider_order, resolve_uses
 from .signals import Structured
+from .stops import StopCondition, compile_stop
 from .wiring import PortInfo, PortRef, check_compatible, parse_ref, port_infos
 
-MAX_PHASES = 4096
 
-
-@dataclass
+@dataclass(frozen=True)
 class Node:
     comp: Component
     method: object
@@ -44,7 +49,7 @@ class Node:
         return f"{self.comp.name}[{','.join(self.ports)}]"
 
 
-@dataclass
+@dataclass(frozen=True)
 class StateSlice:
     comp: Component
     x: slice
@@ -53,30 +58,33 @@ class StateSlice:
     manifold: bool
 
 
-@dataclass
+@dataclass(frozen=True)
 class Plan:
     components: dict[str, Component]
-    pruned: list[str]
+    pruned: tuple[str, ...]
     infos: dict[str, dict[str, PortInfo]]
     sources: dict[PortRef, PortRef]               # input -> upstream output
     out_buffers: dict[PortRef, object]            # ndarray or Cell
-    nodes: list[Node]                             # topological order
-    minor: list[tuple]                            # continuous-stage evaluation
-    major: list[list[tuple]]                      # per phase
-    updates: list[list[tuple]]                    # per phase
-    derivs: list[tuple]
+    nodes: tuple[Node, ...]                       # topological order
+    minor: tuple[tuple, ...]                      # continuous-stage evaluation
+    major: tuple[tuple[tuple, ...], ...]          # per phase
+    updates: tuple[tuple[tuple, ...], ...]        # per phase
+    derivs: tuple[tuple, ...]
+    once: tuple[tuple, ...]                       # time-invariant components: made once, before the first step
     n_phases: int
     X: np.ndarray
     DX: np.ndarray
     XD: np.ndarray
-    slices: list[StateSlice]
+    slices: tuple[StateSlice, ...]
     dslices: dict[str, slice]
     n_euclid_x: int
     stop_flag: StopFlag
     dt: float
+    record_refs: tuple[PortRef, ...]              # recorded ports, in column order
+    record_every: int                             # base steps between recorded rows
+    stops: tuple[StopCondition, ...]
+    used: frozenset                               # output ports something reads
     report: dict = field(default_factory=dict)
-    used: set = field(default_factory=set)        # output ports something reads
-    calls: list = field(default_factory=list)     # (Node, call tuple) for every node, in order
 
     # -- the continuous system the integrators see ------------------------------
     @property
@@ -120,72 +128,10 @@ class Plan:
         return pairs
 
     def __post_init__(self):
-        self._manifold = [s for s in self.slices if s.manifold]
-        self._lie = [s for s in self._manifold if type(s.comp).dexp_inv is not Component.dexp_inv]
-
-    def sample_at_reader_ticks(self, recorded, stopped, record_every: int) -> dict[str, int]:
-        """A ``calc`` group read only by sampled readers runs only when one of them reads.
-
-        Readers that sample: discrete components (a rate), sinks, and the recorder
-        (every ``record_every`` steps). If every reader of a group samples, the group
-        runs every g steps, g the gcd of their periods: each reader then sees a fresh
-        value, and nobody can observe the held one in between (the viewer reading a
-        contact set at 30 Hz, the recorder reading a pose at 50 Hz). Groups a stop
-        condition tests, or a continuous component reads, keep running every step.
-        Returns {group: period} (also in the report).
-        """
-        readers: dict[PortRef, list[int]] = defaultdict(list)
-        for dst, src in self.sources.items():
-            c = self.components[dst.comp]
-            sampling = c.rate is not None or c.is_sink
-            readers[src].append(round(1.0 / (c.rate * self.dt)) if c.rate else 1 if sampling else 0)
-        for ref in recorded:
-            readers[ref].append(record_every)
-        stop = set(stopped)
-        sampled = []
-        for node, _ in self.calls:
-            if node.method == node.comp.output or node.period != 1:
-                continue
-            refs = [PortRef(node.comp.name, p) for p in node.ports]
-            periods = [p for r in refs for p in readers.get(r, ())]
-            if not periods or 0 in periods or any(r in stop for r in refs):
-                continue                       # unread, read every stage, or stop-tested
-            g = 0
-            for p in periods:
-                g = math.gcd(g, p)
-            if g > 1:
-                sampled.append((node, g))
-        n = self.n_phases
-        for _, g in sampled:
-            n = n * g // math.gcd(n, g)
-        if not sampled or n > MAX_PHASES:
-            return {}
-        for node, g in sampled:
-            node.period = g
-        self.updates[:] = [self.updates[p % self.n_phases] for p in range(n)]
-        self.n_phases = n
-        self.major[:] = _major_lists(self.calls, n, self.used)
-        labels = {node.label(): g for node, g in sampled}
-        self.report["sampled_output_groups"] = labels
-        return labels
-
-    @property
-    def once(self) -> list[tuple]:
-        """Calls of time-invariant components: made once, before the first step."""
-        return [call for node, call in self.calls if node.comp.time_invariant]
-
-    # -- outputs nobody reads ------------------------------------------------------------
-    def require(self, refs) -> None:
-        """Mark more output ports as read (e.g. recorded by a Simulator built later): their
-        components are told and skipped groups join the major pass again."""
-        new = {r for r in refs if r not in self.used}
-        if not new:
-            return
-        self.used |= new
-        for name in {r.comp for r in new}:
-            c = self.components[name]
-            c.bind_outputs(frozenset(p for p in c.outputs if PortRef(name, p) in self.used))
-        self.major[:] = _major_lists(self.calls, self.n_phases, self.used)
+        manifold = tuple(s for s in self.slices if s.manifold)
+        object.__setattr__(self, "_manifold", manifold)
+        object.__setattr__(self, "_lie", tuple(s for s in manifold
+                                               if type(s.comp).dexp_inv is not Component.dexp_inv))
 
     def component_of_x(self, index: int) -> str:
         for s in self.slices:
@@ -203,15 +149,23 @@ class Plan:
 # -- helpers ---------------------------------------------------------------------
 
 def _instantiate(resolved: Resolved, registry) -> dict[str, Component]:
-    comps = {}
+    """Components in definition order; built providers-first so each is handed the resources it uses."""
+    classes = {}
     for name, spec in resolved.components.items():
-        where = resolved.where.get(name)
         try:
-            cls = registry.component(spec.type)
+            classes[name] = registry.component(spec.type)
         except Exception as e:
-            raise ConfigError(str(e), where, f"components.{name}.type") from None
+            raise ConfigError(str(e), resolved.where.get(name), f"components.{name}.type") from None
+    try:
+        order, binding = provider_order(classes, {n: s.uses for n, s in resolved.components.items()})
+    except ValueError as e:
+        bad = str(e).split(":", 1)[0].split(" ", 1)[0]
+        raise ConfigError(str(e), resolved.where.get(bad), f"components.{bad}.uses") from None
+    built: dict[str, Component] = {}
+    for name in order:
+        spec, cls, where = resolved.components[name], classes[name], resolved.where.get(name)
         try:
-            comps[name] = cls(name, spec.params, spec.rate)
+            built[name] = cls(name, spec.params, spec.rate, uses=resolve_uses(binding[name], built))
         except ValidationError as e:
             err = e.errors()[0]
             loc = ".".join(str(p) for p in err["loc"])
@@ -223,19 +177,7 @@ def _instantiate(resolved: Resolved, registry) -> dict[str, Component]:
             raise ConfigError(msg, where, f"components.{name}.params.{loc}") from None
         except (ValueError, TypeError) as e:
             raise ConfigError(str(e), where, f"components.{name}") from None
-    return comps
-
-
-def _period(comp: Component, dt: float) -> int:
-    if comp.rate is None:
-        return 1
-    steps = 1.0 / (comp.rate * dt)
-    n = round(steps)
-    if n < 1 or abs(steps - n) > 1e-6 * max(1.0, steps):
-        raise BuildError(f"{comp.name}: rate {comp.rate:g} Hz is not an integer number of base steps "
-                         f"(dt = {dt:g} s gives {steps:.4g} steps per tick); valid rates are "
-                         f"{1 / dt:g}/k Hz for integer k >= 1, e.g. {1 / (dt * max(1, n)):g} Hz")
-    return n
+    return {n: built[n] for n in resolved.components}
 
 
 def _cycle(nodes: list[Node], edges: dict[int, list[tuple[int, PortRef, PortRef]]]) -> str:
@@ -470,29 +412,55 @@ def _continuous_closure(slices, nodes, node_of_port, sources) -> set[int]:
     return minor
 
 
-def _phase_count(periods: dict[str, int]) -> int:
-    n = 1
-    for p in periods.values():
-        n = n * p // math.gcd(n, p)
-    if n > MAX_PHASES:
-        raise BuildError(f"the component rates need {n} distinct tick patterns (> {MAX_PHASES}); choose rates "
-                         f"whose periods in base steps share factors (periods: {sorted(set(periods.values()))})")
-    return n
-
-
 def _evaluated(node: Node, used) -> bool:
     """A ``calc`` port group is pure by contract: skipped when none of its ports is read.
     ``output()`` always runs (it may have side effects such as ``stop``)."""
     return node.method == node.comp.output or any(PortRef(node.comp.name, p) in used for p in node.ports)
 
 
-def _major_lists(calls, n_phases, used) -> list[list[tuple]]:
-    return [[call for node, call in calls
-             if phase % node.period == 0 and _evaluated(node, used) and not node.comp.time_invariant]
-            for phase in range(n_phases)]
+def _sampled_periods(nodes, comps, sources, recorded, stopped, record_every: int, periods: dict, dt: float,
+                     n_phases: int) -> dict[int, int]:
+    """A ``calc`` group read only by sampling readers runs only when one of them reads.
+
+    Readers that sample: discrete components (a rate), sinks, and the recorder
+    (every ``record_every`` steps). If every reader of a group samples, the group
+    runs every g steps, g the gcd of their periods: each reader then sees a fresh
+    value, and nobody can observe the held one in between (the viewer reading a
+    contact set at 30 Hz, the recorder reading a pose at 50 Hz). Groups a stop
+    condition tests, or a continuous component reads, keep running every step.
+    Returns {node index: period}; none if the extra patterns would pass MAX_PHASES.
+    """
+    readers: dict[PortRef, list[int]] = defaultdict(list)
+    for dst, src in sources.items():
+        c = comps[dst.comp]
+        readers[src].append(periods[dst.comp] if c.rate else 1 if c.is_sink else 0)
+    for ref in recorded:
+        readers[ref].append(record_every)
+    stop = set(stopped)
+    sampled = {}
+    for j, node in enumerate(nodes):
+        if node.method == node.comp.output or node.period != 1:
+            continue
+        refs = [PortRef(node.comp.name, p) for p in node.ports]
+        seen = [p for r in refs for p in readers.get(r, ())]
+        if not seen or 0 in seen or any(r in stop for r in refs):
+            continue                       # unread, read every stage, or stop-tested
+        g = 0
+        for p in seen:
+            g = math.gcd(g, p)
+        if g > 1:
+            sampled[j] = g
+    return sampled if lcm([n_phases, *sampled.values()]) <= MAX_PHASES else {}
+
+
+def _major_lists(calls, n_phases, used) -> tuple[tuple[tuple, ...], ...]:
+    return tuple(tuple(call for node, call in calls
+                       if phase % node.period == 0 and _evaluated(node, used) and not node.comp.time_invariant)
+                 for phase in range(n_phases))
 
 
 def build(resolved: Resolved, registry) -> Plan:
+    """Everything a run needs, decided once: the returned plan is never changed afterwards."""
     dt = resolved.sim.dt
     comps = _instantiate(resolved, registry)
     infos = {name: port_infos(c) for name, c in comps.items()}
@@ -501,7 +469,9 @@ def build(resolved: Resolved, registry) -> Plan:
     for ref, (_, w) in zip(recorded, resolved.record):
         if isinstance(infos[ref.comp][ref.port].signal, Structured):
             raise BuildError(f"record {ref} ({w}): only numeric ports can be recorded")
-    stopped = [parse_ref(s.signal, comps, "output", w) for s, w in resolved.stop]
+    stop_refs = [(spec, parse_ref(spec.signal, comps, "output", w), w) for spec, w in resolved.stop]
+    stopped = [ref for _, ref, _ in stop_refs]
+    record_every = period_of(resolved.sim.record_rate, dt, "sim.record_rate")
 
     cstates = {n: c.continuous_state() for n, c in comps.items()}
     dstates = {n: c.discrete_state() for n, c in comps.items()}
@@ -517,26 +487,32 @@ def build(resolved: Resolved, registry) -> Plan:
     X, DX, slices, x_of, dx_of, n_euclid = _layout_continuous(comps, cstates)
     XD, dslices, xd_of = _layout_discrete(comps, dstates)
 
-    periods = {n: _period(c, dt) for n, c in comps.items()}
+    periods = {n: period_of(c.rate, dt, f"{n}: rate") for n, c in comps.items()}
     nodes, node_of_port = _nodes(comps, periods)
     order = _topological_order(nodes, node_of_port, sources)
     minor_set = _continuous_closure(slices, nodes, node_of_port, sources)
-    n_phases = _phase_count(periods)
+    n_phases = phase_count(list(periods.values()))
+    sampled = _sampled_periods(nodes, comps, sources, recorded, stopped, record_every, periods, dt, n_phases)
+    nodes = [dataclasses.replace(nd, period=sampled[j]) if j in sampled else nd for j, nd in enumerate(nodes)]
+    n_phases = lcm([n_phases, *sampled.values()])
 
     def call(node: Node):
         n = node.comp.name
         return (node.method, x_of.get(n, xd_of.get(n)), u_of[n], y_of[n])
 
-    used = set(sources.values()) | set(recorded) | set(stopped)
+    used = frozenset(sources.values()) | frozenset(recorded) | frozenset(stopped)
     for n, c in comps.items():
         c.bind_outputs(frozenset(p for p in c.outputs if PortRef(n, p) in used))
+        set_cache(u_of[n], c.make_cache(x_of.get(n, xd_of.get(n)), u_of[n], y_of[n]))
     calls = [(nodes[i], call(nodes[i])) for i in order]
-    minor = [call(nodes[i]) for i in order if i in minor_set]
+    minor = tuple(call(nodes[i]) for i in order if i in minor_set)
     major = _major_lists(calls, n_phases, used)
+    once = tuple(c for node, c in calls if node.comp.time_invariant)
     update_comps = [c for n, c in comps.items() if dstates[n] is not None or c.is_sink]
-    updates = [[(c.update, xd_of.get(c.name), u_of[c.name]) for c in update_comps if phase % periods[c.name] == 0]
-               for phase in range(n_phases)]
-    derivs = [(s.comp.derivative, x_of[s.comp.name], u_of[s.comp.name], dx_of[s.comp.name]) for s in slices]
+    updates = tuple(tuple((c.update, xd_of.get(c.name), u_of[c.name]) for c in update_comps
+                          if phase % periods[c.name] == 0) for phase in range(n_phases))
+    derivs = tuple((s.comp.derivative, x_of[s.comp.name], u_of[s.comp.name], dx_of[s.comp.name]) for s in slices)
+    stops = tuple(cond for spec, ref, w in stop_refs for cond in compile_stop(spec, ref, out_buffers[ref], w))
 
     report = {
         "components": {n: {"type": c.type_name, "rate_hz": c.rate, "period_steps": periods[n],
@@ -553,7 +529,10 @@ def build(resolved: Resolved, registry) -> Plan:
         "connections": len(sources),
         "dt": dt,
     }
-    return Plan(components=comps, pruned=pruned, infos=infos, sources=sources, out_buffers=out_buffers,
-                nodes=[nodes[i] for i in order], minor=minor, major=major, updates=updates, derivs=derivs,
-                n_phases=n_phases, X=X, DX=DX, XD=XD, slices=slices, dslices=dslices, n_euclid_x=n_euclid,
-                stop_flag=stop_flag, dt=dt, report=report, used=used, calls=calls)
+    if sampled:
+        report["sampled_output_groups"] = {nodes[j].label(): g for j, g in sampled.items()}
+    return Plan(components=comps, pruned=tuple(pruned), infos=infos, sources=sources, out_buffers=out_buffers,
+                nodes=tuple(nodes[i] for i in order), minor=minor, major=major, updates=updates, derivs=derivs,
+                once=once, n_phases=n_phases, X=X, DX=DX, XD=XD, slices=tuple(slices), dslices=dslices,
+                n_euclid_x=n_euclid, stop_flag=stop_flag, dt=dt, record_refs=tuple(recorded),
+                record_every=record_every, stops=stops, used=used, report=report)

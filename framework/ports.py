@@ -41,7 +41,7 @@ class Port:
         sig = self.signal
         if self.structured:
             return sig.describe()
-        shape = sig.shape if not callable(sig.shape) else "f(params)"
+        shape = sig.shape if not callable(sig.shape) else "set at build"
         return f"{shape} [{sig.unit if sig.unit is not None else 'any'}]"
 
 

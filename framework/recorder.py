@@ -34,9 +34,7 @@ class Recorder:
         for ref in refs:
             buf = plan.out_buffers[ref]
             comp = plan.components[ref.comp]
-            names = comp.outputs[ref.port].signal.names
-            if callable(names):
-                names = tuple(names(comp.p))
+            names = comp.outputs[ref.port].signal.element_names(comp)
             self.columns += column_names(ref, buf.shape, names)
             self.views.append(buf.reshape(-1))      # a view: the buffer is never reallocated
             self.slices.append(slice(col, col + buf.size))

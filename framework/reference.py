@@ -31,6 +31,9 @@ def component_reference(registry) -> dict:
                          "feedthrough": list(p.feedthrough_inputs(list(cls.inputs))), "doc": p.doc}
                         for n, p in cls.outputs.items()],
             "params": params,
+            "uses": [{"name": n, "kind": u.kind.__name__, "required": u.required, "doc": u.doc}
+                     for n, u in cls.uses.items()],
+            "provides": [{"name": n, "kind": pr.kind.__name__, "doc": pr.doc} for n, pr in cls.provides.items()],
             "sink": cls.is_sink,
         }
     return out
@@ -46,6 +49,11 @@ def reference_markdown(ref: dict) -> str:
              "Generated from the registry by `snakesim components --markdown`; do not edit by hand.", ""]
     for name, c in ref.items():
         lines += [f"## `{name}`", "", c["summary"], "", f"`{c['module']}.{c['class']}`", ""]
+        for r in c["provides"]:
+            lines += [f"Provides `{r['name']}`: {r['kind']}" + (f" ({r['doc']})" if r["doc"] else "") + ".", ""]
+        for r in c["uses"]:
+            lines += [f"Uses `{r['name']}`: {r['kind']}" + ("" if r["required"] else ", if a component provides one")
+                      + " (bound to the component that provides it).", ""]
         if c["inputs"] or c["outputs"]:
             lines += ["| port | direction | signal | notes |", "|---|---|---|---|"]
             for p in c["inputs"]:

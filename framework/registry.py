@@ -1,15 +1,17 @@
 """Component and integrator registry, filled through pluggy hooks.
 
 Set-up follows pytest's order: create the manager, add hookspecs, register the
-built-in plugins, load third-party entry points (group ``snakesim``), then ask
-every plugin to register. Built-ins use exactly the hooks a third party uses.
+built-in plugins, load third-party entry points, then ask every plugin to
+register. Built-ins enter exactly as a third party does: they are entry points
+of the ``snakesim`` group (pyproject.toml), distinguished only by belonging to
+the ``snakesim`` distribution, and use the same hooks.
 """
 
 from __future__ import annotations
 
 import difflib
-import importlib
 from functools import lru_cache
+from importlib.metadata import entry_points
 
 import pluggy
 
@@ -18,13 +20,8 @@ from .component import Component
 from .errors import RegistryError
 
 ENTRY_POINT_GROUP = "snakesim"
-
-#: modules registered as plugins before entry points are loaded
-BUILTIN_PLUGINS = (
-    "snakesim.framework.integrators.plugin",
-    "snakesim.components.plugin",
-    "snakesim.assemblies.plugin",
-)
+#: the distribution whose entry points are the built-in plugins
+BUILTIN_DISTRIBUTION = "snakesim"
 
 
 def _close(name: str, names) -> str:
@@ -93,13 +90,24 @@ def _snake(name: str) -> str:
     return "".join(out)
 
 
+def _is_builtin(ep) -> bool:
+    dist = getattr(ep, "dist", None)
+    return dist is not None and dist.name == BUILTIN_DISTRIBUTION
+
+
 def make_plugin_manager(load_entry_points: bool = True) -> pluggy.PluginManager:
+    """Built-in entry points first, then (``load_entry_points``) every third-party one."""
     pm = pluggy.PluginManager("snakesim")
     pm.add_hookspecs(hookspecs)
-    for modname in BUILTIN_PLUGINS:
-        pm.register(importlib.import_module(modname), name=modname)
-    if load_entry_points:
-        pm.load_setuptools_entrypoints(ENTRY_POINT_GROUP)
+    eps = sorted(entry_points(group=ENTRY_POINT_GROUP), key=lambda ep: not _is_builtin(ep))
+    if not any(_is_builtin(ep) for ep in eps):
+        raise RegistryError(f"no built-in '{ENTRY_POINT_GROUP}' entry points found: snakesim is not installed "
+                            "(pip install -e . from the repository root)")
+    for ep in eps:
+        name = ep.name if _is_builtin(ep) else f"{ep.dist.name if ep.dist else '?'}:{ep.name}"
+        if not (_is_builtin(ep) or load_entry_points) or pm.get_plugin(name) is not None:
+            continue
+        pm.register(ep.load(), name=name)
     pm.check_pending()
     return pm
 

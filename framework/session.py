@@ -9,7 +9,6 @@ from .errors import ConfigError
 from .plan import Plan, build
 from .registry import Registry, default_registry
 from .simulator import RunResult, Simulator, write_run
-from .wiring import parse_ref
 from .yaml_source import dump_yaml
 
 
@@ -27,8 +26,7 @@ class Session:
             self.integrator = cls(spec.params)
         except Exception as e:
             raise ConfigError(f"bad parameters for integrator '{spec.name}': {e}", None, "sim.integrator.params") from None
-        record = [parse_ref(r, self.plan.components, "output", w) for r, w in resolved.record]
-        self.simulator = Simulator(self.plan, self.integrator, record, resolved.stop, resolved.sim.record_rate)
+        self.simulator = Simulator(self.plan, self.integrator)
 
     # -- views ----------------------------------------------------------------
     def config_dict(self) -> dict:

@@ -1,7 +1,9 @@
 """What flows on a port: numeric arrays (shape, dtype, unit) or structured values.
 
 A numeric shape may name component parameters (``shape=("n", 3)``) or be a
-callable of the params; it is resolved once at build time. Units are strings
+callable of the component (``shape=lambda c: (c.robot.nj,)``: its params
+``c.p``, the resources it uses and the constants ``setup()`` derived); it is
+resolved once at build time, after ``setup()``. Element ``names`` likewise. Units are strings
 compared after normalisation (``N·m`` == ``N*m``); ``unit=None`` on an input
 accepts any unit, as generic blocks (gains, recorders) need.
 """
@@ -23,12 +25,13 @@ def normalize_unit(unit: str | None) -> str | None:
     return u or "1"
 
 
-def resolve_shape(spec: ShapeSpec, params: Any, owner: str) -> tuple[int, ...] | None:
-    """Turn a declared shape into a tuple of ints using the component's params."""
+def resolve_shape(spec: ShapeSpec, comp: Any, owner: str) -> tuple[int, ...] | None:
+    """Turn a declared shape into a tuple of ints: callables get the component, names its params."""
     if spec is None:
         return None
+    params = comp.p
     if callable(spec):
-        spec = spec(params)
+        spec = spec(comp)
     if isinstance(spec, (int, np.integer, str)):
         spec = (spec,)
     dims = []
@@ -52,6 +55,10 @@ class Numeric:
     dtype: Any = np.float64
     unit: str | None = "1"
     names: tuple[str, ...] | Callable[[Any], tuple[str, ...]] | None = None
+
+    def element_names(self, comp) -> tuple[str, ...] | None:
+        """The element names for this component instance (a callable gets the component)."""
+        return tuple(self.names(comp)) if callable(self.names) else self.names
 
     def describe(self, shape: tuple[int, ...] | None) -> str:
         s = "any shape" if shape is None else f"shape {shape}"

@@ -22,36 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import BuildError, SnakesimError
+from .errors import SnakesimError
 from .recorder import Recorder
-from .wiring import PortRef, parse_ref
-
-
-@dataclass
-class StopCondition:
-    label: str
-    view: np.ndarray
-    index: np.ndarray | slice
-    op: str
-    value: float
-    reason: str
-
-    def __post_init__(self):
-        # one element (the usual "com z above"): a scalar compare, no temporaries
-        idx = self.index
-        self._one = int(idx[0]) if isinstance(idx, np.ndarray) and idx.size == 1 else None
-
-    def hit(self) -> bool:
-        if self._one is not None:
-            x = self.view[self._one]
-            return bool(x > self.value if self.op == "above" else x < self.value if self.op == "below"
-                        else abs(x) > self.value)
-        v = self.view[self.index]
-        if self.op == "above":
-            return bool(np.any(v > self.value))
-        if self.op == "below":
-            return bool(np.any(v < self.value))
-        return bool(np.any(np.abs(v) > self.value))
 
 
 @dataclass
@@ -65,50 +37,12 @@ class RunResult:
         return self.log[key]
 
 
-def compile_stops(plan, stops) -> list[StopCondition]:
-    out = []
-    for spec, where in stops:
-        ref = parse_ref(spec.signal, plan.components, "output", where)
-        buf = plan.out_buffers[ref]
-        if not isinstance(buf, np.ndarray):
-            raise BuildError(f"stop condition on {ref} ({where}): only numeric ports can be tested")
-        flat = buf.reshape(-1)
-        if spec.index is None:
-            index = slice(None)
-        else:
-            index = np.atleast_1d(np.asarray(spec.index, dtype=int))
-            if np.any(index >= flat.size) or np.any(index < -flat.size):
-                raise BuildError(f"stop condition on {ref} ({where}): index {spec.index} out of range "
-                                 f"for {flat.size} elements")
-        for op in ("above", "below", "abs_above"):
-            v = getattr(spec, op)
-            if v is not None:
-                label = f"{ref}{'' if spec.index is None else spec.index} {op.replace('_', ' ')} {v:g}"
-                out.append(StopCondition(label, flat, index, op, float(v), spec.reason or label))
-    return out
-
-
 class Simulator:
-    """Runs a compiled :class:`~snakesim.framework.plan.Plan`."""
+    """Runs a compiled :class:`~snakesim.framework.plan.Plan`; it reads the plan and never changes it."""
 
-    def __init__(self, plan, integrator, record: list[PortRef] | None = None, stops=(),
-                 record_rate: float | None = None):
+    def __init__(self, plan, integrator):
         self.plan = plan
         self.integrator = integrator
-        self.record_refs = record or []
-        self.stops = compile_stops(plan, stops)
-        stopped = [parse_ref(s.signal, plan.components, "output", w) for s, w in stops]
-        plan.require(list(self.record_refs) + stopped)
-        dt = plan.dt
-        if record_rate is None:
-            self.record_every = 1
-        else:
-            n = round(1.0 / (record_rate * dt))
-            if n < 1 or abs(n * record_rate * dt - 1.0) > 1e-6:
-                raise BuildError(f"sim.record_rate {record_rate:g} Hz is not an integer number of base steps "
-                                 f"(dt = {dt:g} s); valid: {1 / dt:g}/k Hz")
-            self.record_every = n
-        plan.sample_at_reader_ticks(self.record_refs, stopped, self.record_every)
         # every run starts from the initial state (one session, many runs)
         self.X0, self.XD0 = plan.X.copy(), plan.XD.copy()
 
@@ -120,7 +54,7 @@ class Simulator:
         if n_steps < 1 or abs(n_steps * dt - duration) > 1e-9 * max(1.0, duration):
             raise SnakesimError(f"duration {duration:g} s is not a whole number of steps dt = {dt:g} s "
                                 f"(nearest: {max(1, n_steps) * dt:g} s)")
-        log = Recorder(self.record_refs, plan, n_steps // self.record_every + 1)
+        log = Recorder(plan.record_refs, plan, n_steps // plan.record_every + 1)
         X, XD = plan.X, plan.XD
         np.copyto(X, self.X0)
         np.copyto(XD, self.XD0)
@@ -130,9 +64,9 @@ class Simulator:
         for fn, x, u, y in plan.once:
             fn(t0, x, u, y)
         major, updates, derivs = plan.major, plan.updates, plan.derivs
-        n_phases, rec_every = plan.n_phases, self.record_every
+        n_phases, rec_every = plan.n_phases, plan.record_every
         has_cont = plan.nx > 0
-        stops, flag = self.stops, plan.stop_flag
+        stops, flag = plan.stops, plan.stop_flag
         flag.reason = flag.source = None
         stop_reason, bad = None, None
         wall0 = time.perf_counter()

@@ -52,7 +52,7 @@ def port_infos(comp: Component) -> dict[str, PortInfo]:
             out[name] = PortInfo(sig, None, None)
             continue
         try:
-            shape = resolve_shape(sig.shape, comp.p, f"{comp.name}.{name}")
+            shape = resolve_shape(sig.shape, comp, f"{comp.name}.{name}")
         except (AttributeError, ValueError, TypeError) as e:
             raise BuildError(str(e)) from None
         out[name] = PortInfo(sig, shape, normalize_unit(sig.unit))

@@ -12,12 +12,12 @@ from .point_contact import PointContact, PointContactParams
 from .screw_samples import ScrewContactSamples, body_wrench, body_wrenches, thread_direction
 from .steady_state import steady_axial_speed
 from .contact_set import ContactSet
-from .robot_screws import RobotSource, ScrewLayout, screw_layout
+from .robot_screws import RobotScrewError, ScrewLayout, screw_layout
 from .screw_drive import ScrewDrive, ScrewDriveParams
 from .screw_sdf import ScrewSdfContact, ScrewSdfContactParams
 
 __all__ = ["anisotropic_friction", "contact_forces", "ev_magnitude", "isotropic_friction", "normal_force",
            "slip_direction", "tangent_axis", "tangential_velocity", "contact_forces_nb", "contact_forces_numba",
            "body_wrenches_nb", "FrictionMaterial", "PointContact", "PointContactParams", "ScrewContactSamples", "body_wrench", "body_wrenches",
-           "thread_direction", "steady_axial_speed", "ContactSet", "RobotSource", "ScrewLayout", "screw_layout",
+           "thread_direction", "steady_axial_speed", "ContactSet", "RobotScrewError", "ScrewLayout", "screw_layout",
            "ScrewDrive", "ScrewDriveParams", "ScrewSdfContact", "ScrewSdfContactParams"]

@@ -10,6 +10,7 @@ screws; it knows which DOFs are screws from the robot description (robot_screws.
 sat clips at ±tau_max (no limit when None). A pure velocity servo settles with a speed
 error τ_load / k_v; scenes that need the exact speed read joint_v.
 
+uses robot: RobotModel                     (the multibody's)
 in   joint_q[nj] rad, joint_v[nj] rad/s   (multibody joint_q, joint_v)
 out  tau[nj] N·m                          (feedthrough from both; to multibody.tau)
 """
@@ -19,12 +20,13 @@ from __future__ import annotations
 import numpy as np
 from pydantic import Field
 
-from snakesim.framework import Component, Input, Output
+from snakesim.framework import Component, Input, Output, Params, Uses
+from snakesim.components.multibody.robot_model import RobotModel
 
-from .robot_screws import RobotSource, screw_layout
+from .robot_screws import screw_layout
 
 
-class ScrewDriveParams(RobotSource):
+class ScrewDriveParams(Params):
     omega: float = Field(0.0, description="rad/s, set spin rate of every screw DOF")
     kv: float = Field(5.0, ge=0, description="N·m·s/rad, screw velocity gain")
     kp: float = Field(500.0, ge=0, description="N·m/rad, lock stiffness of the other joints")
@@ -32,21 +34,18 @@ class ScrewDriveParams(RobotSource):
     tau_max: float | None = Field(None, gt=0, description="N·m, symmetric torque limit")
 
 
-def _nj(p):
-    return (screw_layout(p).nj,)
-
-
 class ScrewDrive(Component[ScrewDriveParams]):
     type_name = "screw_drive"
     Params = ScrewDriveParams
-    joint_q = Input(shape=_nj, unit="rad")
-    joint_v = Input(shape=_nj, unit="rad/s")
-    tau = Output(shape=_nj, unit="N*m", feedthrough=True)
+    robot = Uses(RobotModel)
+    joint_q = Input(shape=lambda c: (c.robot.nj,), unit="rad", names=lambda c: c.robot.joints)
+    joint_v = Input(shape=lambda c: (c.robot.nj,), unit="rad/s", names=lambda c: c.robot.joints)
+    tau = Output(shape=lambda c: (c.robot.nj,), unit="N*m", feedthrough=True, names=lambda c: c.robot.joints)
 
     def setup(self):
         p = self.p
-        lay = screw_layout(p)
-        screw = np.zeros(lay.nj, dtype=bool)
+        self.screws = lay = self.robot.derived(screw_layout)
+        screw = np.zeros(self.robot.nj, dtype=bool)
         screw[lay.spin_dof] = True
         self._kp = np.where(screw, 0.0, p.kp)
         self._kd = np.where(screw, p.kv, p.kd)

@@ -34,6 +34,7 @@ Material: the terrain's per-sample material (k, c, μ, ev_a, ev_b); any field of
 ``material`` overrides it for every terrain material. v_ε, the regularisation mode and
 ev_floor are this component's.
 
+uses robot: RobotModel      (the multibody's; its screws: robot_screws.py)
 in   link_poses[nl,7]       multibody link_poses (xyz + quaternion xyzw, world)
      link_velocities[nl,6]  multibody link_velocities ([v origin, ω], world)
      joint_v[nj]            rad/s, multibody joint_v (screw spin rates)
@@ -45,8 +46,8 @@ out  wrenches[nl,6]         N, N·m: to multibody.wrenches ([f, τ] world, about
      contact_set            ContactSet of the active contacts (computed once per step)
 all feedthrough from all inputs.
 
-Robot source: the multibody's parameters (design, modules, head, urdf, robot): see
-robot_screws.py for how the two share one description.
+Robot: the multibody's RobotModel, handed over at build time; the screw layout is
+derived from it once per robot (robot_screws.py), so link rows and DOF order agree.
 """
 
 from __future__ import annotations
@@ -56,13 +57,14 @@ from typing import Literal
 import numpy as np
 from pydantic import Field
 
-from snakesim.framework import Component, Input, Output, Params
+from snakesim.framework import Component, Input, Output, Params, Uses
+from snakesim.components.multibody.robot_model import RobotModel
 
 from ..terrain.analytic import PlaneTerrain
 from ..terrain.base import Terrain
 from .contact_set import ContactSet
 from .kernels import EV_FLOOR, MODES
-from .robot_screws import RobotSource, screw_layout
+from .robot_screws import screw_layout
 from .screw_samples import ScrewContactSamples
 from .sdf_kernels import contact_wrenches, plane_contact_step, sample_points, screw_centres
 
@@ -83,7 +85,7 @@ class MaterialOverride(Params):
                          for m in materials], dtype=np.float64)
 
 
-class ScrewSdfContactParams(RobotSource):
+class ScrewSdfContactParams(Params):
     rings: int = Field(3, ge=1, description="rings of samples per screw, spread over its length")
     per_ring: int = Field(8, ge=1, description="samples per ring, evenly around the envelope")
     phase: float = Field(0.0, description="rad, rotates every ring about its axis (φ = 3π/2 is the joint frame's −z)")
@@ -95,32 +97,34 @@ class ScrewSdfContactParams(RobotSource):
     margin: float = Field(0.0, ge=0, description="m added to each screw's bounding sphere")
 
 
-def _lay(p):
-    return screw_layout(p)
-
-
 class ScrewSdfContact(Component[ScrewSdfContactParams]):
     type_name = "screw_sdf_contact"
     Params = ScrewSdfContactParams
     #: query PlaneTerrain in numba (tests and the bench switch it off to compare)
     fast_plane = True
 
-    link_poses = Input(shape=lambda p: (_lay(p).nl, 7), unit=None)
-    link_velocities = Input(shape=lambda p: (_lay(p).nl, 6), unit=None)
-    joint_v = Input(shape=lambda p: (_lay(p).nj,), unit="rad/s")
+    robot = Uses(RobotModel)
+    link_poses = Input(shape=lambda c: (c.robot.nl, 7), unit=None)
+    link_velocities = Input(shape=lambda c: (c.robot.nl, 6), unit=None)
+    joint_v = Input(shape=lambda c: (c.robot.nj,), unit="rad/s", names=lambda c: c.robot.joints)
     terrain = Input(type=Terrain)
-    wrenches = Output(shape=lambda p: (_lay(p).nl, 6), unit=None, feedthrough=True,
-                      names=lambda p: tuple(f"{ln}.{c}" for ln in _lay(p).links for c in ("fx", "fy", "fz", "tx", "ty", "tz")))
+    wrenches = Output(shape=lambda c: (c.robot.nl, 6), unit=None, feedthrough=True,
+                      names=lambda c: tuple(f"{ln}.{k}" for ln in c.robot.links for k in ("fx", "fy", "fz", "tx", "ty", "tz")))
     normal_force = Output(shape=(1,), unit="N", feedthrough=True)
     contacts = Output(shape=(1,), unit="1", feedthrough=True)
-    screw_normal_force = Output(shape=lambda p: (_lay(p).ns,), unit="N", feedthrough=True,
-                                names=lambda p: _lay(p).names)
+    screw_normal_force = Output(shape=lambda c: (c.screws.ns,), unit="N", feedthrough=True,
+                                names=lambda c: c.screws.names)
     contact_set = Output(type=ContactSet, feedthrough=True, calc="calc_contact_set")
+
+    @property
+    def layout(self):
+        """The screw layout (``self.screws``); kept for readers outside contact/."""
+        return self.screws
 
     # -- set-up ------------------------------------------------------------------------------
     def setup(self):
         p = self.p
-        lay = self.layout = screw_layout(p)
+        lay = self.screws = self.robot.derived(screw_layout)
         samples = [ScrewContactSamples(lay.radius[s], lay.length[s], p.rings, p.per_ring, lay.lead_angle[s],
                                        int(lay.hand[s]), lay.mount_R[s], lay.mount_p[s], p.phase)
                    for s in range(lay.ns)]
@@ -171,7 +175,7 @@ class ScrewSdfContact(Component[ScrewSdfContactParams]):
             raise ValueError(f"{self.name}: input 'terrain' carries no Terrain; connect a terrain component's "
                              "'terrain' output to it")
         mats = self._material_table(terrain)
-        lay = self.layout
+        lay = self.screws
         poses = u.link_poses
         plane = self._plane
         p = self.p
@@ -213,7 +217,7 @@ class ScrewSdfContact(Component[ScrewSdfContactParams]):
         hands the same namespaces every call and their arrays cannot be rebound (held, so ids stay unique)."""
         c = self._plane_call
         if c is None or c[0] is not u or c[1] is not y:
-            p, lay, plane = self.p, self.layout, self._plane
+            p, lay, plane = self.p, self.screws, self._plane
             args = (p.broad_phase, plane[0], plane[1], plane[2], self._sphere_r, self._start, self._points_B,
                     lay.mount_p, self._active, self._centres, self._pts, self._dist, self._normal, self._mat,
                     self._sample, self._owner, u.link_poses, u.link_velocities, u.joint_v, self._ringc_B,
@@ -241,14 +245,14 @@ class ScrewSdfContact(Component[ScrewSdfContactParams]):
     def calc_contact_set(self, t, x, u, y):
         if not (u.terrain is self._seen_terrain and np.array_equal(u.link_poses, self._seen_poses)
                 and np.array_equal(u.link_velocities, self._seen_vel) and np.array_equal(u.joint_v, self._seen_jv)):
-            self.output(t, x, u, _Scratch(self.layout))     # the last evaluation was at other inputs
+            self.output(t, x, u, _Scratch(self.screws))     # the last evaluation was at other inputs
         m = self._m
         on = np.flatnonzero(self._dist[:m] < 0.0)
         y.contact_set = ContactSet(
             t=float(t), points=self._cpt[on].copy(), normals=self._normal[on].copy(), forces=self._force[on].copy(),
             normal_force=self._fn[on].copy(), depth=-self._dist[on], slip=self._vel[on].copy(),
-            link=self.layout.screw_row[self._owner[on]], material=self._mat[on].copy(),
-            link_names=self.layout.links)
+            link=self.screws.screw_row[self._owner[on]], material=self._mat[on].copy(),
+            link_names=self.robot.links)
 
 
 class _Scratch:

@@ -3,7 +3,9 @@
 Each source outputs ``setpoint[nj]`` (rad for position-mode joints, rad/s for
 velocity-mode ones, as the PID reads them) and ``rate[nj]`` (rad/s, the
 set-point's time derivative, for the PID's ``rate_ref``), joints in the
-multibody's order (:func:`.robot_source.joint_names`).
+multibody's order (``robot.joints``).
+
+uses robot: RobotModel (the multibody's): joint names and kinds (screw or not)
 
 joint_setpoints: constant screw speeds and locked bend/twist joints (paper 4.2):
     screws:      screw_speed · screw_direction[j]      (direction ±1 by name/pattern, default +1)
@@ -23,12 +25,13 @@ from typing import Literal
 import numpy as np
 from pydantic import Field
 
-from snakesim.framework import Component, Output
+from snakesim.components.multibody.robot_model import RobotModel
+from snakesim.framework import Component, Output, Params, Uses
 
-from .robot_source import RobotSource, finite_or_raise, joint_kind, joint_names, match, per_joint
+from .joint_selection import finite_or_raise, match, per_joint
 
 
-class JointSetpointsParams(RobotSource):
+class JointSetpointsParams(Params):
     screw_speed: float = Field(0.0, description="rad/s, every screw joint")
     screw_direction: dict[str, float] = Field(default_factory=dict,
                                               description="multiplier (e.g. -1) by screw joint name/pattern")
@@ -36,18 +39,22 @@ class JointSetpointsParams(RobotSource):
     setpoints: dict[str, float] = Field(default_factory=dict, description="explicit value by joint name/pattern")
 
 
-def _nj(p):
-    return (len(joint_names(p)),)
+def _nj(c):
+    return (c.robot.nj,)
 
 
-def constant_setpoints(p, owner: str) -> np.ndarray:
-    """The joint_setpoints vector of params ``p`` (also the base the wave gaits start from)."""
-    names = joint_names(p)
+def _joints(c):
+    return c.robot.joints
+
+
+def constant_setpoints(robot: RobotModel, p, owner: str) -> np.ndarray:
+    """The joint_setpoints vector of params ``p`` for ``robot`` (also the base the wave gaits start from)."""
+    names = robot.joints
     for what in ("screw_direction", "hold", "setpoints"):
         finite_or_raise(getattr(p, what), f"{owner}: {what}")
     if not math.isfinite(p.screw_speed):
         raise ValueError(f"{owner}: screw_speed must be finite, got {p.screw_speed}")
-    screw = np.array([joint_kind(n) == "screw" for n in names])
+    screw = np.array([k == "screw" for k in robot.joint_kinds], dtype=bool)
     direction = np.array(per_joint(names, p.screw_direction, f"{owner}: screw_direction", 1.0), dtype=float)
     not_screws = [names[i] for i in np.flatnonzero(~screw) if direction[i] != 1.0]
     if not_screws and p.screw_direction:
@@ -61,11 +68,12 @@ def constant_setpoints(p, owner: str) -> np.ndarray:
 class JointSetpoints(Component[JointSetpointsParams]):
     type_name = "joint_setpoints"
     Params = JointSetpointsParams
-    setpoint = Output(shape=_nj, unit=None, feedthrough=(), names=joint_names)
-    rate = Output(shape=_nj, unit="rad/s", feedthrough=(), names=joint_names)
+    robot = Uses(RobotModel)
+    setpoint = Output(shape=_nj, unit=None, feedthrough=(), names=_joints)
+    rate = Output(shape=_nj, unit="rad/s", feedthrough=(), names=_joints)
 
     def setup(self):
-        self._value = constant_setpoints(self.p, self.name)
+        self._value = constant_setpoints(self.robot, self.p, self.name)
 
     def output(self, t, x, u, y):
         y.setpoint[:] = self._value
@@ -88,12 +96,13 @@ class SerpenoidParams(JointSetpointsParams):
 class SerpenoidGait(Component[SerpenoidParams]):
     type_name = "serpenoid_gait"
     Params = SerpenoidParams
-    setpoint = Output(shape=_nj, unit=None, feedthrough=(), names=joint_names)
-    rate = Output(shape=_nj, unit="rad/s", feedthrough=(), names=joint_names)
+    robot = Uses(RobotModel)
+    setpoint = Output(shape=_nj, unit=None, feedthrough=(), names=_joints)
+    rate = Output(shape=_nj, unit="rad/s", feedthrough=(), names=_joints)
 
     def setup(self):
-        p, names = self.p, joint_names(self.p)
-        self._base = constant_setpoints(p, self.name)
+        p, names = self.p, self.robot.joints
+        self._base = constant_setpoints(self.robot, p, self.name)
         idx = [np.array(match(names, p.wave_joints, f"{self.name}: wave_joints"))]
         amp, ph = [p.amplitude], [p.phase]
         if p.kind == "sidewinding":

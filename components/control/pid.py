@@ -40,6 +40,7 @@ in   setpoint[nj]  rad (position joints) or rad/s (velocity joints), DOF joints 
      q[nj] rad, v[nj] rad/s   from multibody.joint_q / joint_v
 out  tau[nj]   N·m    (feedthrough from all inputs)
      error[nj] rad or rad/s, e above
+uses robot: RobotModel (the multibody's): joint names, kinds, continuity and effort limits
 """
 
 from __future__ import annotations
@@ -49,10 +50,11 @@ from typing import Literal
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
-from snakesim.framework import Component, ContinuousState, Input, Output
+from snakesim.components.multibody.robot_model import JOINT_KINDS, RobotModel
+from snakesim.framework import Component, ContinuousState, Input, Output, Params, Uses
 
+from .joint_selection import per_joint
 from .pid_kernel import pid_law
-from .robot_source import JOINT_KINDS, RobotSource, continuous_mask, effort_limits, joint_kind, joint_names, per_joint
 
 Mode = Literal["position", "velocity", "off"]
 
@@ -77,7 +79,7 @@ class JointGains(BaseModel):
     tau_max: float | None = Field(None, gt=0, description="N·m, symmetric torque limit")
 
 
-class JointPidParams(RobotSource):
+class JointPidParams(Params):
     gains: dict[str, JointGains] = Field(default_factory=dict, description="by joint name or glob pattern")
     kind_gains: dict[str, JointGains] = Field(default_factory=dict,
                                               description="per joint kind (bend, twist, screw, other)")
@@ -85,35 +87,38 @@ class JointPidParams(RobotSource):
     anti_windup: Literal["clamp", "none"] = "clamp"
 
 
-def _nj(p):
-    return (len(joint_names(p)),)
+def _nj(c):
+    return (c.robot.nj,)
+
+
+def _joints(c):
+    return c.robot.joints
 
 
 class JointPid(Component[JointPidParams]):
     type_name = "joint_pid"
     Params = JointPidParams
+    robot = Uses(RobotModel)
 
-    setpoint = Input(shape=_nj, unit=None, names=joint_names)
+    setpoint = Input(shape=_nj, unit=None, names=_joints)
     rate_ref = Input(shape=_nj, unit="rad/s", default=0.0)
     tau_ff = Input(shape=_nj, unit="N*m", default=0.0)
     q = Input(shape=_nj, unit="rad")
     v = Input(shape=_nj, unit="rad/s")
-    tau = Output(shape=_nj, unit="N*m", feedthrough=True, names=joint_names)
-    error = Output(shape=_nj, unit=None, feedthrough=True, names=joint_names)
+    tau = Output(shape=_nj, unit="N*m", feedthrough=True, names=_joints)
+    error = Output(shape=_nj, unit=None, feedthrough=True, names=_joints)
 
     # -- set-up: one array per gain ---------------------------------------------------
     def setup(self):
-        p = self.p
-        names = list(joint_names(p))
-        self.joint_names = names
+        p, robot = self.p, self.robot
+        names = list(robot.joints)
         bad = set(p.kind_gains) - set(JOINT_KINDS)
         if bad:
             raise ValueError(f"{self.name}: kind_gains: unknown joint kind(s) {sorted(bad)}; kinds: {', '.join(JOINT_KINDS)}")
         explicit = per_joint(names, p.gains, f"{self.name}: gains")
-        effort = effort_limits(p) if p.torque_limit == "urdf" else np.full(len(names), np.inf)
+        effort = robot.effort_limits() if p.torque_limit == "urdf" else np.full(len(names), np.inf)
         rows = []
-        for i, n in enumerate(names):
-            kind = joint_kind(n)
+        for i, kind in enumerate(robot.joint_kinds):
             g = dict(DEFAULT_GAINS[kind], tau_max=float(effort[i]))
             for layer in (p.kind_gains.get(kind), explicit[i]):
                 if layer is not None:
@@ -126,7 +131,7 @@ class JointPid(Component[JointPidParams]):
         on = self._pos | self._vel
         self._kp, self._ki, self._kd = col("kp") * on, col("ki") * on, col("kd") * on
         self._tf, self._tmax = col("tf"), col("tau_max")
-        self._cont = continuous_mask(p) & self._pos
+        self._cont = robot.continuous_mask() & self._pos
         self._clamp = p.anti_windup == "clamp"
         self._nj = len(names)
         self._discrete = self.rate is not None
@@ -152,7 +157,7 @@ class JointPid(Component[JointPidParams]):
             return None
         n = self._nj
         return ContinuousState(np.zeros(2 * n), names=tuple(f"{j}.{s}" for s in ("integral", "filter")
-                                                           for j in self.joint_names))
+                                                           for j in self.robot.joints))
 
     def discrete_state(self):
         if not self._discrete:
@@ -191,8 +196,8 @@ class JointPid(Component[JointPidParams]):
     # -- introspection ------------------------------------------------------------------------
     def gains_of(self, joint: str) -> dict:
         """The resolved gains of one joint (mode, kp, ki, kd, tf, tau_max)."""
-        try:
-            return dict(self.gains_table[self.joint_names.index(joint)])
-        except ValueError:
-            raise KeyError(f"{self.name}: no DOF joint '{joint}'; joints: {', '.join(self.joint_names)}") from None
+        i = self.robot.dof_of.get(joint)
+        if i is None:
+            raise KeyError(f"{self.name}: no DOF joint '{joint}'; joints: {', '.join(self.robot.joints)}")
+        return dict(self.gains_table[i])
 

@@ -50,7 +50,7 @@ class ScheduleParams(Params):
 class Schedule(Component[ScheduleParams]):
     type_name = "schedule"
     Params = ScheduleParams
-    y = Output(shape=lambda p: (p.n,), unit=None, feedthrough=())
+    y = Output(shape=lambda c: (c.p.n,), unit=None, feedthrough=())
 
     def setup(self):
         n = self.p.n

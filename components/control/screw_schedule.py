@@ -15,6 +15,7 @@ front screw's (the rear screw of a pair turns at −speed, the URDF mimic). Late
 out  setpoint[nj]  rad (held joints) or rad/s (screws), the multibody's DOF joint order
      rate[nj]      rad/s, 0 (piecewise-constant set-points)
      phase[1]      index of the current phase (−1 before the first)
+uses robot: RobotModel (the multibody's): joint names and kinds
 """
 
 from __future__ import annotations
@@ -25,16 +26,17 @@ import re
 import numpy as np
 from pydantic import Field, model_validator
 
-from snakesim.framework import Component, Output
+from snakesim.components.multibody.robot_model import RobotModel
+from snakesim.framework import Component, Output, Params, Uses
 
+from .joint_selection import finite_or_raise, per_joint
 from .schedule import check_switch_times
-from .robot_source import RobotSource, finite_or_raise, joint_kind, joint_names, per_joint
 
 GROUPS = ("all", "tail_half", "head_half")
 _MODULE = re.compile(r"_(\d+)$")
 
 
-class ScrewScheduleParams(RobotSource):
+class ScrewScheduleParams(Params):
     times: list[float] = Field(default_factory=list, description="s, start of each phase, strictly increasing")
     speeds: list[dict[str, float]] = Field(default_factory=list,
                                            description="rad/s per phase, by screw name/pattern or group")
@@ -46,13 +48,18 @@ class ScrewScheduleParams(RobotSource):
         return self
 
 
-def _nj(p):
-    return (len(joint_names(p)),)
+def _nj(c):
+    return (c.robot.nj,)
 
 
-def screw_groups(names) -> dict[str, np.ndarray]:
+def _joints(c):
+    return c.robot.joints
+
+
+def screw_groups(robot: RobotModel) -> dict[str, np.ndarray]:
     """Masks of the screw DOFs in each group, from the module index ending each screw's name."""
-    screw = np.array([joint_kind(n) == "screw" for n in names])
+    names = robot.joints
+    screw = np.array([k == "screw" for k in robot.joint_kinds], dtype=bool)
     module = np.array([int(m.group(1)) if (m := _MODULE.search(n)) else -1 for n in names])
     n_mod = module[screw].max() + 1 if screw.any() else 0
     half = n_mod // 2
@@ -81,16 +88,17 @@ def phase_vector(names, speeds: dict[str, float], base: np.ndarray, groups, owne
 class ScrewSchedule(Component[ScrewScheduleParams]):
     type_name = "screw_schedule"
     Params = ScrewScheduleParams
-    setpoint = Output(shape=_nj, unit=None, feedthrough=(), names=joint_names)
-    rate = Output(shape=_nj, unit="rad/s", feedthrough=(), names=joint_names)
+    robot = Uses(RobotModel)
+    setpoint = Output(shape=_nj, unit=None, feedthrough=(), names=_joints)
+    rate = Output(shape=_nj, unit="rad/s", feedthrough=(), names=_joints)
     phase = Output(shape=(1,), unit="1", feedthrough=())
 
     def setup(self):
-        p, names = self.p, list(joint_names(self.p))
+        p, names = self.p, list(self.robot.joints)
         finite_or_raise(p.hold, f"{self.name}: hold")
         for k, s in enumerate(p.speeds):
             finite_or_raise(s, f"{self.name}: speeds[{k}]")
-        groups = screw_groups(names)
+        groups = screw_groups(self.robot)
         base = np.where(groups["all"], 0.0, np.array(per_joint(names, p.hold, f"{self.name}: hold", 0.0), dtype=float))
         self._t = np.asarray(p.times, dtype=float)
         self._table = np.array([base] + [phase_vector(names, s, base, groups, f"{self.name}: speeds[{k}]")

@@ -8,6 +8,7 @@ block (n = nj) when both drive the multibody.
 
 in   q[nj] rad, v[nj] rad/s    from multibody.joint_q / joint_v
 out  tau[nj] N·m               (feedthrough)
+uses robot: RobotModel (the multibody's): joint names and which are continuous
 """
 
 from __future__ import annotations
@@ -15,31 +16,33 @@ from __future__ import annotations
 import numpy as np
 from pydantic import Field
 
-from snakesim.framework import Component, Input, Output
+from snakesim.components.multibody.robot_model import RobotModel
+from snakesim.framework import Component, Input, Output, Params, Uses
 
-from .robot_source import RobotSource, continuous_mask, finite_or_raise, joint_names, per_joint, wrap_angle
+from .joint_selection import finite_or_raise, per_joint, wrap_angle
 
 
-class SpringDamperParams(RobotSource):
+class SpringDamperParams(Params):
     stiffness: dict[str, float] = Field(default_factory=dict, description="N·m/rad by joint name or pattern")
     damping: dict[str, float] = Field(default_factory=dict, description="N·m·s/rad by joint name or pattern")
     rest: dict[str, float] = Field(default_factory=dict, description="rest angle q0, rad, by joint name or pattern")
 
 
-def _nj(p):
-    return (len(joint_names(p)),)
+def _nj(c):
+    return (c.robot.nj,)
 
 
 class JointSpringDamper(Component[SpringDamperParams]):
     type_name = "joint_spring_damper"
     Params = SpringDamperParams
+    robot = Uses(RobotModel)
 
     q = Input(shape=_nj, unit="rad")
     v = Input(shape=_nj, unit="rad/s")
-    tau = Output(shape=_nj, unit="N*m", feedthrough=True, names=joint_names)
+    tau = Output(shape=_nj, unit="N*m", feedthrough=True, names=lambda c: c.robot.joints)
 
     def setup(self):
-        p, names = self.p, joint_names(self.p)
+        p, names = self.p, self.robot.joints
         for what in ("stiffness", "damping", "rest"):
             finite_or_raise(getattr(p, what), f"{self.name}: {what}")
         self._k = np.array(per_joint(names, p.stiffness, f"{self.name}: stiffness", 0.0), dtype=float)
@@ -47,7 +50,7 @@ class JointSpringDamper(Component[SpringDamperParams]):
         self._q0 = np.array(per_joint(names, p.rest, f"{self.name}: rest", 0.0), dtype=float)
         if (self._k < 0).any() or (self._c < 0).any():
             raise ValueError(f"{self.name}: stiffness and damping must be >= 0")
-        self._wrap = continuous_mask(p)
+        self._wrap = self.robot.continuous_mask()
 
     def output(self, t, x, u, y):
         dq = u.q - self._q0

@@ -11,6 +11,7 @@ name/pattern, 0 otherwise). Outside [t_first, t_last] the end values hold.
 
 out  setpoint[nj]  joints in the multibody's order
      rate[nj]      rad/s, dy/dt of the interpolant (0 outside the time range)
+uses robot: RobotModel (the multibody's): the DOF joint names the file's columns must be
 
 A relative ``file`` is looked up from the working directory, then from the
 repository root (so ``configs/trajectories/...`` works from anywhere). Every
@@ -27,14 +28,15 @@ from typing import Literal
 import numpy as np
 from pydantic import Field
 
-from snakesim.framework import Component, Output
+from snakesim.components.multibody.robot_model import RobotModel
+from snakesim.framework import Component, Output, Params, Uses
 
-from .robot_source import RobotSource, finite_or_raise, joint_names, per_joint
+from .joint_selection import finite_or_raise, per_joint
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
 
 
-class CsvTrajectoryParams(RobotSource):
+class CsvTrajectoryParams(Params):
     file: str = Field(..., description="CSV path: header time,<joint names>; one row per knot")
     interpolation: Literal["linear", "cubic"] = "linear"
     default: dict[str, float] = Field(default_factory=dict, description="value of joints the file omits, by name/pattern")
@@ -91,26 +93,31 @@ def read_trajectory(name: str, joints) -> tuple[np.ndarray, list[str], np.ndarra
     return t, cols, data[:, 1:]
 
 
-def _nj(p):
-    return (len(joint_names(p)),)
+def _nj(c):
+    return (c.robot.nj,)
+
+
+def _joints(c):
+    return c.robot.joints
 
 
 class CsvTrajectory(Component[CsvTrajectoryParams]):
     type_name = "csv_trajectory"
     Params = CsvTrajectoryParams
-    setpoint = Output(shape=_nj, unit=None, feedthrough=(), names=joint_names)
-    rate = Output(shape=_nj, unit="rad/s", feedthrough=(), names=joint_names)
+    robot = Uses(RobotModel)
+    setpoint = Output(shape=_nj, unit=None, feedthrough=(), names=_joints)
+    rate = Output(shape=_nj, unit="rad/s", feedthrough=(), names=_joints)
 
     def setup(self):
         p = self.p
-        names = list(joint_names(p))
+        names = list(self.robot.joints)
         finite_or_raise(p.default, f"{self.name}: default")
         try:
             t, cols, Y = read_trajectory(p.file, names)
         except ValueError as e:
             raise ValueError(f"{self.name}: {e}") from None
         self._base = np.array(per_joint(names, p.default, f"{self.name}: default", 0.0), dtype=float)
-        self._cols = np.array([names.index(c) for c in cols], dtype=np.int64)
+        self._cols = np.array([self.robot.dof_index(c) for c in cols], dtype=np.int64)
         self._t, self._Y = t, Y
         self._spline = self._dspline = None
         if p.interpolation == "cubic" and t.size >= 2:

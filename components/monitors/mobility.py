@@ -27,6 +27,7 @@ in   link_rotations[nl, 3, 3], link_poses[nl, 7], link_velocities[nl, 6]   from 
      contacts   contact count (optional; NaN/unconnected: contact_made stays 0)
 out  tilt[nt] rad, max_tilt rad, failed, contact_made, t_contact s, hold_time s, max_hold_time s,
      climb m, max_climb m
+uses robot: RobotModel (the multibody's): link names and rows
 """
 
 from __future__ import annotations
@@ -37,9 +38,9 @@ from typing import Literal
 import numpy as np
 from pydantic import Field
 
-from snakesim.components.control.robot_source import RobotSource, link_names, match
-
-from snakesim.framework import Component, Input, Output
+from snakesim.components.control.joint_selection import match
+from snakesim.components.multibody.robot_model import RobotModel
+from snakesim.framework import Component, Input, Output, Params, Uses
 
 Vec3 = tuple[float, float, float]
 
@@ -47,7 +48,7 @@ Vec3 = tuple[float, float, float]
 STARTED, P0, CONTACT, T_CONTACT, HOLD, MAX_HOLD, MAX_CLIMB, FAILED = 0, 1, 2, 3, 4, 5, 6, 7
 
 
-class MobilityParams(RobotSource):
+class MobilityParams(Params):
     tilt_links: list[str] = Field(default_factory=lambda: ["module_*"], description="links whose axis is checked")
     axis: Vec3 = Field((1.0, 0.0, 0.0), description="body axis in each link frame")
     vertical: Literal["up", "down", "line"] = "line"
@@ -59,21 +60,16 @@ class MobilityParams(RobotSource):
     reference_link: str | None = Field(None, description="link whose climb is measured (default: the root)")
 
 
-def _tilt_names(p):
-    links = link_names(p)
-    idx = sorted({i for pat in p.tilt_links for i in match(links, pat, "tilt_links")})
-    return tuple(links[i] for i in idx)
-
-
 class MobilityMonitor(Component[MobilityParams]):
     type_name = "mobility_monitor"
     Params = MobilityParams
+    robot = Uses(RobotModel)
 
-    link_rotations = Input(shape=lambda p: (len(link_names(p)), 3, 3), unit="1")
-    link_poses = Input(shape=lambda p: (len(link_names(p)), 7), unit=None)
-    link_velocities = Input(shape=lambda p: (len(link_names(p)), 6), unit=None)
+    link_rotations = Input(shape=lambda c: (c.robot.nl, 3, 3), unit="1")
+    link_poses = Input(shape=lambda c: (c.robot.nl, 7), unit=None)
+    link_velocities = Input(shape=lambda c: (c.robot.nl, 6), unit=None)
     contacts = Input(shape=(1,), unit=None, default=np.nan)
-    tilt = Output(shape=lambda p: (len(_tilt_names(p)),), unit="rad", names=_tilt_names)
+    tilt = Output(shape=lambda c: (len(c.tilt_names),), unit="rad", names=lambda c: c.tilt_names)
     max_tilt = Output(shape=(), unit="rad")
     failed = Output(shape=(), unit="1")
     contact_made = Output(shape=(), unit="1")
@@ -85,21 +81,22 @@ class MobilityMonitor(Component[MobilityParams]):
 
     def setup(self):
         p = self.p
-        links = list(link_names(p))
+        links = list(self.robot.links)
         g = np.array(p.gravity, dtype=float)
         a = np.array(p.axis, dtype=float)
         if not (np.linalg.norm(g) > 0 and np.linalg.norm(a) > 0):
             raise ValueError(f"{self.name}: gravity and axis need a direction (non-zero), got {p.gravity}, {p.axis}")
         self._up = -g / np.linalg.norm(g)
         self._axis = a / np.linalg.norm(a)
-        self._tilt_i = np.array([links.index(n) for n in _tilt_names(p)], dtype=np.int64)
+        tilt_i = sorted({i for pat in p.tilt_links for i in match(links, pat, f"{self.name}: tilt_links")})
+        self._tilt_i = np.array(tilt_i, dtype=np.int64)
+        self.tilt_names = tuple(links[i] for i in tilt_i)
         self._hold_i = np.array(sorted({i for pat in p.hold_links for i in match(links, pat, f"{self.name}: hold_links")}),
                                 dtype=np.int64)
         ref = p.reference_link if p.reference_link is not None else links[0]
         if ref not in links:
             raise ValueError(f"{self.name}: reference_link '{ref}' is not a link; links: {', '.join(links)}")
         self._ref = links.index(ref)
-        self._tilt_names = _tilt_names(p)
 
     def discrete_state(self):
         return np.zeros(8)          # t_contact is read only once contact_made is 1 (state must stay finite)
@@ -126,7 +123,7 @@ class MobilityMonitor(Component[MobilityParams]):
         y.failed[...] = float(fail or x[FAILED] > 0)
         if fail and self.p.stop_on_failure:
             j = int(np.argmax(tilt))
-            self.stop(f"mobility failure: {self._tilt_names[j]} tilted {math.degrees(worst):.1f} deg from the "
+            self.stop(f"mobility failure: {self.tilt_names[j]} tilted {math.degrees(worst):.1f} deg from the "
                       f"vertical ({self.p.vertical}), limit {math.degrees(self.p.max_tilt):.1f} deg")
         y.contact_made[...] = x[CONTACT]
         y.t_contact[...] = x[T_CONTACT] if x[CONTACT] else np.nan

@@ -13,6 +13,7 @@ same yaw as one lying upright.
 
 in   link_poses[nl, 7], link_rotations[nl, 3, 3]   from the multibody
 out  pose[3]  [x m, y m, yaw rad]   (feedthrough)
+uses robot: RobotModel (the multibody's): the link row
 """
 
 from __future__ import annotations
@@ -20,37 +21,33 @@ from __future__ import annotations
 import numpy as np
 from pydantic import Field
 
-from snakesim.framework import Component, Input, Output
-
-from snakesim.components.control.robot_source import RobotSource, link_names
+from snakesim.components.multibody.robot_model import RobotModel
+from snakesim.framework import Component, Input, Output, Params, Uses
 
 Vec3 = tuple[float, float, float]
 
 
-class PlanarPoseParams(RobotSource):
+class PlanarPoseParams(Params):
     link: str = Field("tail", description="link whose pose is reported")
     axis: Vec3 = Field((1.0, 0.0, 0.0), description="body axis in the link frame")
-
-
-def _nl(p):
-    return len(link_names(p))
 
 
 class PlanarPose(Component[PlanarPoseParams]):
     type_name = "planar_pose"
     Params = PlanarPoseParams
-    link_poses = Input(shape=lambda p: (_nl(p), 7), unit=None)
-    link_rotations = Input(shape=lambda p: (_nl(p), 3, 3), unit="1")
+    robot = Uses(RobotModel)
+    link_poses = Input(shape=lambda c: (c.robot.nl, 7), unit=None)
+    link_rotations = Input(shape=lambda c: (c.robot.nl, 3, 3), unit="1")
     pose = Output(shape=(3,), unit=None, feedthrough=True, names=("x", "y", "yaw"))
 
     def setup(self):
-        links = list(link_names(self.p))
+        links = self.robot.links
         if self.p.link not in links:
             raise ValueError(f"{self.name}: link '{self.p.link}' is not a link of the robot; links: {', '.join(links)}")
         a = np.asarray(self.p.axis, dtype=float)
         if not np.linalg.norm(a) > 0:
             raise ValueError(f"{self.name}: axis must be non-zero, got {self.p.axis}")
-        self._i = links.index(self.p.link)
+        self._i = self.robot.link_index(self.p.link)
         self._axis = a / np.linalg.norm(a)
 
     def output(self, t, x, u, y):

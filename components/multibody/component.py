@@ -25,21 +25,25 @@ out  state only (no feedthrough):
      a[nv]                    dv/dt
      link_accelerations[nl,6] classical [a of link origin, α], world axes, gravity NOT included
                               (an IMU reads a - g)
-     cut_wrenches[nc, 6]      for each cut in params.fts_cuts (a joint, fixed or moving, or a
-                              link): the wrench the parent side exerts on the child side, [f, τ]
-                              in the cut's child-link frame about its origin (paper 2.2.4)
+     joint_wrenches[nl, 6]    for each link, the wrench its parent side exerts on it across its
+                              parent joint (fixed or moving), [f, τ] in the link's frame about its
+                              origin (paper 2.2.4: force-torque sensors read rows of it); the
+                              root's row is zero
 continuous state: [q, v] on the configuration manifold (pin.integrate), second order
+
+provides  robot: RobotModel   the built robot (robot_model.py), handed to every component that
+                             declares ``Uses(RobotModel)``: a scene names its robot only here
 
 Links (nl) are the URDF's <link> elements in document order, massless
 frames included; DOF joints (nj) the moving joints that are not mimics, in
-URDF order (``link_names`` and ``joint_names`` on the component; with the
-usual parents-first URDF, v[6:] is in that order too).
+URDF order (``robot.links`` and ``robot.joints``; with the usual
+parents-first URDF, v[6:] is in that order too).
 
 Integration: ``integrate`` is pin.integrate (the quaternion and the (cos, sin)
 of continuous joints stay on their manifolds). ``dexp_inv`` is the
-Munthe-Kaas stage correction an RK scheme needs to keep its order on SE(3);
-the framework's RK4 does not call it yet, and is then second order in the
-free-flyer orientation (see tests/multibody/test_conservation.py).
+Munthe-Kaas stage correction the framework's multi-stage integrators (RK4,
+DOPRI5, ROS2) apply so they keep their order on SE(3) (see
+tests/multibody/test_conservation.py).
 
 Cost: Pinocchio 4.1 allocates O(nv³) derivative tensors in every Data: about
 2 GB and 3 s to build at 100 EELS-1.0 modules (nv = 306), negligible below
@@ -53,10 +57,10 @@ from typing import Literal
 import numpy as np
 from pydantic import Field
 
-from snakesim.framework import Component, ContinuousState, Input, Output
+from snakesim.framework import Component, ContinuousState, Input, Output, Provides
 
-from .layout import Layout, layout_of
-from .robot_source import RobotSource
+from . import joint_values
+from .robot_model import RobotModel, RobotSource
 
 Vec3 = tuple[float, float, float]
 
@@ -80,17 +84,11 @@ class MultibodyParams(RobotSource):
     armature_floor: float = Field(1e-3, ge=0, description="kg·m², least default armature")
     damping: dict[str, float] = Field(default_factory=dict, description="N·m·s/rad by joint name or pattern")
     screw_pairs: Literal["auto", "embedded", "mimic_crba"] = "auto"
-    fts_cuts: list[str] = Field(default_factory=list, description="joint or link names/patterns for cut_wrenches")
 
 
-def _lay(p) -> Layout:
-    return layout_of(p)
-
-
-def _names(suffixes, of="links"):
-    def f(p):
-        base = getattr(_lay(p), of)
-        return tuple(f"{b}.{s}" for b in base for s in suffixes)
+def _names(suffixes):
+    def f(c):
+        return tuple(f"{b}.{s}" for b in c.robot.links for s in suffixes)
     return f
 
 
@@ -101,24 +99,26 @@ class Multibody(Component[MultibodyParams]):
     type_name = "multibody"
     Params = MultibodyParams
 
-    tau = Input(shape=lambda p: (_lay(p).nj,), unit="N*m", default=0.0, names=lambda p: tuple(_lay(p).joints))
-    wrenches = Input(shape=lambda p: (_lay(p).nl, 6), unit=None, default=0.0,
-                     names=_names(("fx", "fy", "fz", "tx", "ty", "tz")))
-    gravity = Input(shape=lambda p: (1,) if p.gravity_input == "scale" else (3,), unit=None, default=np.nan)
+    robot = Provides(RobotModel, doc="the built robot: links, joints, frames, geometry, screws")
 
-    q = Output(shape=lambda p: (_lay(p).nq,), unit=None, feedthrough=(), calc="calc_state",
-               names=lambda p: tuple(_lay(p).q_names))
-    v = Output(shape=lambda p: (_lay(p).nv,), unit=None, feedthrough=(), calc="calc_state",
-               names=lambda p: tuple(_lay(p).v_names))
-    joint_q = Output(shape=lambda p: (_lay(p).nj,), unit="rad", feedthrough=(), calc="calc_state",
-                     names=lambda p: tuple(_lay(p).joints))
-    joint_v = Output(shape=lambda p: (_lay(p).nj,), unit="rad/s", feedthrough=(), calc="calc_state",
-                     names=lambda p: tuple(_lay(p).joints))
-    link_poses = Output(shape=lambda p: (_lay(p).nl, 7), unit=None, feedthrough=(), calc="calc_state",
+    tau = Input(shape=lambda c: (c.robot.nj,), unit="N*m", default=0.0, names=lambda c: c.robot.joints)
+    wrenches = Input(shape=lambda c: (c.robot.nl, 6), unit=None, default=0.0,
+                     names=_names(("fx", "fy", "fz", "tx", "ty", "tz")))
+    gravity = Input(shape=lambda c: (1,) if c.p.gravity_input == "scale" else (3,), unit=None, default=np.nan)
+
+    q = Output(shape=lambda c: (c.robot.nq,), unit=None, feedthrough=(), calc="calc_state",
+               names=lambda c: c.robot.q_names)
+    v = Output(shape=lambda c: (c.robot.nv,), unit=None, feedthrough=(), calc="calc_state",
+               names=lambda c: c.robot.v_names)
+    joint_q = Output(shape=lambda c: (c.robot.nj,), unit="rad", feedthrough=(), calc="calc_state",
+                     names=lambda c: c.robot.joints)
+    joint_v = Output(shape=lambda c: (c.robot.nj,), unit="rad/s", feedthrough=(), calc="calc_state",
+                     names=lambda c: c.robot.joints)
+    link_poses = Output(shape=lambda c: (c.robot.nl, 7), unit=None, feedthrough=(), calc="calc_state",
                         names=_names(("x", "y", "z", "qx", "qy", "qz", "qw")))
-    link_rotations = Output(shape=lambda p: (_lay(p).nl, 3, 3), unit="1", feedthrough=(), calc="calc_state",
+    link_rotations = Output(shape=lambda c: (c.robot.nl, 3, 3), unit="1", feedthrough=(), calc="calc_state",
                             names=_names(tuple(f"r{i}{j}" for i in range(3) for j in range(3))))
-    link_velocities = Output(shape=lambda p: (_lay(p).nl, 6), unit=None, feedthrough=(), calc="calc_state",
+    link_velocities = Output(shape=lambda c: (c.robot.nl, 6), unit=None, feedthrough=(), calc="calc_state",
                              names=_names(SIX))
     # their own group: read by recorders and stop conditions, not by the derivatives' inputs, so
     # integrator stages (the continuous closure) skip them
@@ -126,11 +126,11 @@ class Multibody(Component[MultibodyParams]):
                       names=("px", "py", "pz", "lx", "ly", "lz"))
     com = Output(shape=(3,), unit="m", feedthrough=(), calc="calc_momentum", names=("x", "y", "z"))
     energy = Output(shape=(2,), unit="J", feedthrough=("gravity",), calc="calc_energy", names=("kinetic", "potential"))
-    a = Output(shape=lambda p: (_lay(p).nv,), unit=None, feedthrough=True, names=lambda p: tuple(_lay(p).v_names))
-    link_accelerations = Output(shape=lambda p: (_lay(p).nl, 6), unit=None, feedthrough=True,
+    a = Output(shape=lambda c: (c.robot.nv,), unit=None, feedthrough=True, names=lambda c: c.robot.v_names)
+    link_accelerations = Output(shape=lambda c: (c.robot.nl, 6), unit=None, feedthrough=True,
                                 names=_names(("ax", "ay", "az", "alphax", "alphay", "alphaz")))
-    cut_wrenches = Output(shape=lambda p: (len(_lay(p).cuts), 6), unit=None, feedthrough=True,
-                          names=_names(("fx", "fy", "fz", "tx", "ty", "tz"), of="cuts"))
+    joint_wrenches = Output(shape=lambda c: (c.robot.nl, 6), unit=None, feedthrough=True,
+                            names=_names(("fx", "fy", "fz", "tx", "ty", "tz")))
 
     # -- set-up ------------------------------------------------------------------------
     def setup(self):
@@ -143,28 +143,28 @@ class Multibody(Component[MultibodyParams]):
         p = self.p
         if not np.all(np.isfinite(p.gravity)):
             raise ValueError(f"{self.name}: gravity {p.gravity} must be finite")
-        lay = self._layout = layout_of(p)
-        self.link_names, self.joint_names, self.cut_names = list(lay.links), list(lay.joints), list(lay.cuts)
+        robot = self.robot = RobotModel.of(RobotSource(**{k: getattr(p, k) for k in RobotSource.model_fields}))
         self._k = kernels
-        self.mode, self.mode_reason = choose_mode(p.screw_pairs, lay.groups)
-        self.armature_user = lay.armature(p)
-        self.damping_user = lay.damping(p)
-        self.dyn = build_dynamics(lay.tree, self.mode, self.armature_user, lay.groups)
+        self.mode, self.mode_reason = choose_mode(p.screw_pairs, robot.groups)
+        self.armature_user = joint_values.armature(robot, p)
+        self.damping_user = joint_values.damping(robot, p)
+        self.dyn = build_dynamics(robot.tree, self.mode, self.armature_user, robot.groups)
         model = self.dyn.model
-        if (model.nq, model.nv) != (lay.nq, lay.nv):
+        if (model.nq, model.nv) != (robot.nq, robot.nv):
             raise AssertionError("internal: model layout differs from the port layout")
-        lay.check_mass_matrix(self.dyn, self.name)
-        self._ta = tree_arrays(lay.tree, model)
-        nl, nq, nv = lay.nl, lay.nq, lay.nv
+        joint_values.check_mass_matrix(robot, self.dyn, self.name)
+        self._ta = tree_arrays(robot.tree, model)
+        nl, nq, nv = robot.nl, robot.nq, robot.nv
         self._nq, self._nv = nq, nv
-        self._dof_v = np.array([model.joints[model.getJointId(j)].idx_v for j in lay.joints], dtype=np.int64)
-        jq = [model.joints[model.getJointId(j)] for j in lay.joints]
+        self._dof_v = np.array([model.joints[model.getJointId(j)].idx_v for j in robot.joints], dtype=np.int64)
+        jq = [model.joints[model.getJointId(j)] for j in robot.joints]
         self._jq_idx = np.array([m.idx_q for m in jq], dtype=np.int64)
         self._jq_cs = np.array([m.nq == 2 for m in jq], dtype=bool)
-        self._damp = np.array([self.damping_user.get(j, 0.0) for j in lay.joints])
+        self._damp = np.array([self.damping_user.get(j, 0.0) for j in robot.joints])
         self._arm_v = np.zeros(nv)
-        self._arm_v[self._dof_v] = [self.armature_user.get(j, 0.0) for j in lay.joints]
-        self._cut_links = np.array([lay.tree.link_index[c] for c in lay.cut_links], dtype=np.int64)
+        self._arm_v[self._dof_v] = [self.armature_user.get(j, 0.0) for j in robot.joints]
+        # every link but the root has a parent joint to cut across
+        self._cut_links = np.array([i for i, ln in enumerate(robot.links) if ln != robot.tree.root], dtype=np.int64)
         # kinematics buffers (state-dependent), reused across calls
         self._R = np.zeros((nl, 3, 3))
         self._p = np.zeros((nl, 3))
@@ -189,12 +189,12 @@ class Multibody(Component[MultibodyParams]):
         self._aba = self._pin.aba if self.mode != "mimic_crba" else None
         self.bind_outputs(self.used_outputs)
         self._report = None
-        self._x0 = lay.initial_state(p, model)       # validated here, so errors name the component
+        self._x0 = joint_values.initial_state(robot, p, model)   # validated here, so errors name the component
 
     def continuous_state(self):
         return ContinuousState(self._x0.copy(), ndx=2 * self._nv,
                                second_order=self._nv,
-                               names=tuple(self._layout.q_names + [f"{n}.v" for n in self._layout.v_names]))
+                               names=self.robot.q_names + tuple(f"{n}.v" for n in self.robot.v_names))
 
     def integrate(self, x, dx, out):
         nq = self._nq
@@ -219,7 +219,7 @@ class Multibody(Component[MultibodyParams]):
         super().bind_outputs(used)
         self._want_qv = bool(used & {"q", "v"})
         self._want_rot = "link_rotations" in used
-        self._want_acc = bool(used & {"a", "link_accelerations", "cut_wrenches"})
+        self._want_acc = bool(used & {"a", "link_accelerations", "joint_wrenches"})
 
     # -- hot path -----------------------------------------------------------------------
     # Caches are keyed by the bytes of their inputs (cheaper than np.array_equal, and exact):
@@ -328,7 +328,7 @@ class Multibody(Component[MultibodyParams]):
 
     def output(self, t, x, u, y):
         if not self._want_acc:
-            return      # nobody reads a, link_accelerations or cut_wrenches: derivative() solves alone
+            return      # nobody reads a, link_accelerations or joint_wrenches: derivative() solves alone
         qdd = self._solve(x, u)
         self._pending = self._inputs_key(x, u)
         y.a[:] = qdd
@@ -340,9 +340,9 @@ class Multibody(Component[MultibodyParams]):
                         self._thd, x[nq:], qdd, self._alpha, self._ao)
         y.link_accelerations[:, :3] = self._ao
         y.link_accelerations[:, 3:] = self._alpha
-        if self._cut_links.size:
+        if "joint_wrenches" in self.used_outputs:
             k.cut_wrenches(t_.order, t_.parent, self._R, self._p, self._w, self._alpha, self._ao, t_.mass, t_.com,
-                           t_.inertia, u.wrenches, self._g, self._S, self._cut_links, y.cut_wrenches)
+                           t_.inertia, u.wrenches, self._g, self._S, self._cut_links, y.joint_wrenches)
 
     # -- introspection ------------------------------------------------------------------------
     def build_report(self):
@@ -354,20 +354,14 @@ class Multibody(Component[MultibodyParams]):
         cost of one dynamics evaluation with and without it. A dict; ``print()`` gives a table."""
         if self._report is None or (timing and not self._report.get("timed")):
             from .report import optimisation_report
-            self._report = optimisation_report(self._layout, self.dyn, self.mode, self.mode_reason,
+            self._report = optimisation_report(self.robot, self.dyn, self.mode, self.mode_reason,
                                                self.armature_user, timing=timing)
         return self._report
 
     def dof_index(self, joint: str) -> int:
         """Index of a DOF joint in tau / joint_q / joint_v."""
-        try:
-            return self.joint_names.index(joint)
-        except ValueError:
-            raise KeyError(f"{self.name}: '{joint}' is not a DOF joint; DOF joints: {', '.join(self.joint_names)}") from None
+        return self.robot.dof_index(joint)
 
     def link_index(self, link: str) -> int:
         """Row of a link in wrenches / link_poses / link_velocities / link_accelerations."""
-        try:
-            return self.link_names.index(link)
-        except ValueError:
-            raise KeyError(f"{self.name}: no link '{link}'; links: {', '.join(self.link_names)}") from None
+        return self.robot.link_index(link)

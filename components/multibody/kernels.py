@@ -158,11 +158,12 @@ def generalized_forces(order, parent, jtype, vidx, mult, R, p, aw, W, S, tau):
 
 @njit(cache=True)
 def cut_wrenches(order, parent, R, p, w, alpha, ao, mass, com, inertia, W, g, S, cut_links, out):
-    """Wrench the parent side exerts on the subtree below each cut link, in that link's frame.
+    """Wrench the parent side exerts on the subtree below each cut link, in that link's frame, into
+    ``out[link row]`` (other rows untouched).
 
     Per link, the momentum rate minus gravity minus the external wrench;
     summed over the subtree (Newton-Euler on the URDF links, so it holds
-    across fixed joints that the optimised model merged away). out[k] =
+    across fixed joints that the optimised model merged away). out[l] =
     [f, τ about the cut link's origin], cut link axes.
     """
     root = order[0]
@@ -215,8 +216,8 @@ def cut_wrenches(order, parent, R, p, w, alpha, ao, mass, com, inertia, W, g, S,
         c0, c1, c2 = _cross(rx, ry, rz, S[l, 0], S[l, 1], S[l, 2])
         t0, t1, t2 = S[l, 3] - c0, S[l, 4] - c1, S[l, 5] - c2
         for i in range(3):
-            out[k, i] = R[l, 0, i] * S[l, 0] + R[l, 1, i] * S[l, 1] + R[l, 2, i] * S[l, 2]
-            out[k, 3 + i] = R[l, 0, i] * t0 + R[l, 1, i] * t1 + R[l, 2, i] * t2
+            out[l, i] = R[l, 0, i] * S[l, 0] + R[l, 1, i] * S[l, 1] + R[l, 2, i] * S[l, 2]
+            out[l, 3 + i] = R[l, 0, i] * t0 + R[l, 1, i] * t1 + R[l, 2, i] * t2
 
 
 @njit(cache=True)

@@ -142,16 +142,6 @@ def analyse_mimic_groups(tree: LinkTree) -> list[MimicGroup]:
 
 # -- per-joint parameters ----------------------------------------------------------
 
-def joint_kind(name: str) -> str:
-    if name.startswith("bend"):
-        return "bend"
-    if name.startswith("twist"):
-        return "twist"
-    if "screw" in name:
-        return "screw"
-    return "other"
-
-
 def match_values(names: list[str], values: dict[str, float], what: str) -> dict[str, float]:
     """name -> value for each of ``names`` matched by ``values`` (exact names first, then fnmatch
     patterns in the order given). A key that matches nothing raises, listing the valid names."""

@@ -3,15 +3,18 @@
 shapes.py           the shape guesses (curves) and their world pose
 fit.py              fit_shape(): curve -> q0 + tail pose for a design
 placed_multibody.py component `placed_multibody`: the multibody with a `shape:` parameter
-settle.py           component `placement_settle`: attraction, settle test, latch, gravity on
+settle.py           component `placement_settle`: attraction, settle test, latch, gravity on; its phases
+                    (SettlePhase) and the attraction springs it shows (AttractionSet)
+handoff.py          a settled placement's state as a hold run's parameters
 """
 
 from .fit import Placement, PlacementError, fit_shape
 from .placed_multibody import PlacedMultibody
-from .settle import Settle
+from .settle import AttractionSet, Settle, SettlePhase
 from .shapes import Pose, Shape
 
-__all__ = ["PlacedMultibody", "Placement", "PlacementError", "Pose", "Settle", "Shape", "fit_shape"]
+__all__ = ["AttractionSet", "PlacedMultibody", "Placement", "PlacementError", "Pose", "Settle", "SettlePhase", "Shape",
+           "fit_shape"]
 
 #: the components this package registers (components/plugin.py BUILTIN)
 PLACEMENT = (PlacedMultibody, Settle)

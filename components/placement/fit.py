@@ -49,6 +49,8 @@ import math
 
 import numpy as np
 
+from snakesim.components.multibody.robot_model import RobotModel, joint_kind
+
 from .shapes import Shape, world_curve
 
 DEFAULT_LIMITS = {"bend": math.pi / 4, "twist": math.pi / 2}
@@ -136,8 +138,6 @@ class _Chord:
 
 def _chain(tree, joints_dof):
     """Path joints root -> last module, the bend joints on it, and each bend's v_rel (child frame)."""
-    from snakesim.components.multibody.model import joint_kind
-
     bends = [j for j in joints_dof if joint_kind(j) == "bend"]
     if not bends:
         raise PlacementError("the robot has no bend joints (names 'bend*'): a shape cannot be fitted; "
@@ -166,19 +166,18 @@ def _chain(tree, joints_dof):
     return path, on_path, v_rel, v_tail
 
 
-def fit_shape(source, shape: Shape | dict, limits: dict[str, float] | None = None) -> Placement:
-    """Initial joint angles and tail pose putting ``source``'s backbone on ``shape`` (see module doc).
+def fit_shape(robot: RobotModel, shape: Shape | dict, limits: dict[str, float] | None = None) -> Placement:
+    """Initial joint angles and tail pose putting ``robot``'s backbone on ``shape`` (see module doc).
 
-    ``source``: any object with the robot-source fields (design, modules, head, urdf, robot),
-    e.g. the multibody's params. ``limits``: symmetric limit (rad) per joint kind.
+    ``robot``: the built robot (:class:`RobotModel`, e.g. ``RobotModel.load(design="eels-1.5", modules=4)``
+    or the multibody's). ``limits``: symmetric limit (rad) per joint kind.
     """
-    from snakesim.components.control.robot_source import robot_layout
-    from snakesim.components.multibody.model import joint_kind
-
+    if not isinstance(robot, RobotModel):
+        raise TypeError(f"fit_shape: 'robot' must be a RobotModel (RobotModel.load(design=..., modules=...) or "
+                        f"a multibody's .robot), got {type(robot).__name__}")
     shape = shape if isinstance(shape, Shape) else Shape(**shape)
     lim = dict(DEFAULT_LIMITS, **(limits or {}))
-    lay = robot_layout(source)
-    tree, names = lay.tree, list(lay.joints)
+    tree, names = robot.tree, list(robot.joints)
     R_pose, P0 = shape.pose.rotation(), np.asarray(shape.pose.position, float)
     if shape.kind == "joints":
         from snakesim.components.multibody.model import match_values

@@ -30,14 +30,16 @@ import json
 
 import numpy as np
 
+from .settle import SettlePhase
+
 
 def held_state(session, result, prefix: str = "placement-scene/") -> dict:
     """The placement run's loaded state as hold-scene parameters: q, pose (tail), setpoint and tau_ff
-    (DOF joints in URDF order), nj. Read at the last sample of the loading phase (phase 1: pre-load
+    (DOF joints in URDF order), nj. Read at the last sample of the loading phase (SettlePhase.LOADING: pre-load
     on, gravity still off), so the run may go on into its own hold. The run must record
     settle.phase, robot.joint_q, robot.link_poses and settle.tau_ff."""
     phase = np.asarray(result[prefix + "settle.phase"][:, 0])
-    loading = np.flatnonzero((phase >= 1.0) & (phase < 2.0))
+    loading = np.flatnonzero(phase == SettlePhase.LOADING)
     if loading.size == 0:
         raise ValueError(f"held_state: the placement run has no loading phase (phase reached {phase.max():g}): "
                          "run it past the latch, with settle load_time > 0")

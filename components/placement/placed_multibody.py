@@ -5,21 +5,24 @@
       params: {design: eels-1.5, modules: 4,
                shape: {kind: helix, radius: 0.25, pitch: 2.0, pose: {position: [0, 0, 0]}}}
 
-Everything else is the multibody's (ports, parameters, state): see
-components/multibody/component.py. The fit (fit.py) runs when the parameters
-are validated, so the resolved configuration (``snakesim run --dump``) shows
-the fitted q0 and base pose beside the shape; when ``shape`` is given it
-replaces q0 and the base pose (a re-run of that file fits the same values).
-Why a parameter transform and not a component: the initial state is the
-multibody's own, fixed before the first step, and no other component may
-write another's state.
+Everything else is the multibody's (ports, parameters, state, and the robot it
+provides: ``provides robot: RobotModel``): see components/multibody/component.py.
+The fit (fit.py) is a function of the built :class:`RobotModel` and runs in
+``setup()``, before the multibody computes its initial state; it writes the
+fitted values into the component's parameters, so the resolved configuration
+(``snakesim run --dump``, an ``--out`` folder's config.yaml) shows the fitted
+q0 and base pose beside the shape. When ``shape`` is given it replaces q0 and
+the base pose (a re-run of that file fits the same values).
+Why not a component of its own: the initial state is the multibody's own,
+fixed before the first step, and no other component may write another's state.
 """
 
 from __future__ import annotations
 
-from pydantic import Field, model_validator
+from pydantic import Field
 
 from ..multibody.component import Multibody, MultibodyParams
+from ..multibody.robot_model import RobotModel, RobotSource
 from .fit import fit_shape
 from .shapes import Shape
 
@@ -28,16 +31,20 @@ class PlacedMultibodyParams(MultibodyParams):
     shape: Shape | None = Field(None, description="initial shape guess; replaces q0 and the base pose")
     limits: dict[str, float] = Field(default_factory=dict, description="rad per joint kind (bend, twist) for the fit")
 
-    @model_validator(mode="after")
-    def _place(self):
-        if self.shape is not None:
-            pl = fit_shape(self, self.shape, self.limits)
-            object.__setattr__(self, "q0", pl.q0)
-            object.__setattr__(self, "base_position", pl.base_position)
-            object.__setattr__(self, "base_quaternion", pl.base_quaternion)
-        return self
-
 
 class PlacedMultibody(Multibody):
     type_name = "placed_multibody"
     Params = PlacedMultibodyParams
+
+    def setup(self):
+        p = self.p
+        if p.shape is not None:
+            # the robot Multibody.setup() builds (RobotModel.of is memoised: the same object)
+            robot = RobotModel.of(RobotSource(**{k: getattr(p, k) for k in RobotSource.model_fields}))
+            pl = fit_shape(robot, p.shape, p.limits)
+            self.placement = pl
+            self.p = p.model_copy(update={"q0": pl.q0, "base_position": pl.base_position,
+                                          "base_quaternion": pl.base_quaternion})
+        else:
+            self.placement = None
+        super().setup()

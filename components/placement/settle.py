@@ -1,6 +1,6 @@
 """Settling a placed robot into the terrain (paper 2.2.6, step 2), then holding it with gravity on.
 
-Phase 0, settling (gravity off). Each screw's contact samples (the rings the SDF
+Phase SETTLING (0, gravity off). Each screw's contact samples (the rings the SDF
 contact back end uses, fixed in the screw's parent body) are queried against the
 terrain; the NEAREST sample of each screw (signed distance φ_s, outward normal
 n̂_s) is pulled towards the surface by a spring, and every link with mass gets a
@@ -34,12 +34,12 @@ otherwise the joint reactions would spin the free-floating robot (the tail link
 has no contact). These squeeze the robot between opposite surfaces and are
 what presses the screws on the terrain once the springs are gone.
 
-Phase 1, loading (``load_time`` s, gravity still off): the springs and drag are
+Phase LOADING (1, ``load_time`` s, gravity still off): the springs and drag are
 released, the joints stay free and the pre-load torques act alone, so the robot
 conforms under the squeeze until every screw carries its share (a screw that
 latched a fraction of a mm off the wall is pushed onto it; with the joints held
 instead, the other screws' friction would pin the shape and that screw would
-stay unloaded). Phase 2, holding: the set-points are latched at the loaded
+stay unloaded). Phase HOLDING (2): the set-points are latched at the loaded
 angles, the pre-load stays as feed-forward and gravity is switched on: the
 contact forces are then the pre-load's, and the position gains only resist the
 change gravity brings. ``load_time`` = 0 latches the settled angles and switches
@@ -61,10 +61,12 @@ acting now, one per pulled screw (φ_s > 0, settling only): the nearest sample p
 and f_s, world frame; empty once latched. Computed only when something reads it.
 
 Discrete state at ``rate`` (give rate = 1/dt: the drag is a damper and must
-not be held over several steps): [phase (0 settling, 1 loading, 2 holding), settle_time, quiet_since,
-latched set-points (nj), latched pre-load torques (nj)] (times −1 until set). Outputs are computed at each tick from the state
-and the inputs.
+not be held over several steps): [phase (:class:`SettlePhase` as a float: 0 SETTLING, 1 LOADING,
+2 HOLDING), settle_time, quiet_since, latched set-points (nj), latched pre-load torques (nj)]
+(times −1 until set). Outputs are computed at each tick from the state and the inputs.
 
+uses robot: RobotModel (the multibody's): link and joint order, masses, joint axes; the screws
+     (radius, length, lead angle, mounts) through ``robot.derived(screw_layout)``, as the contact uses
 in   link_poses[nl, 7], link_velocities[nl, 6], joint_q[nj]    multibody outputs
      terrain                                                   structured Terrain
      drive[nj]          set-point offsets once holding (optional, default 0): rad/s screws, rad others
@@ -72,7 +74,7 @@ out  wrenches[nl, 6]    N, N·m attraction + drag, world axes about link origins
      gravity[1]         0 settling and loading, ``gravity_scale`` holding (multibody gravity input, "scale")
      setpoint[nj]       rad (bend/twist, position mode), rad/s (screws: 0) for joint_pid
      tau_ff[nj]         N·m pre-load torques (0 settling) for joint_pid.tau_ff
-     phase[1]           0 settling, 1 loading, 2 holding
+     phase[1]           SettlePhase: 0 SETTLING, 1 LOADING, 2 HOLDING
      settle_time[1]     s, time of the latch (NaN before)
      hold_time[1]       s, time gravity came on (NaN before)
      gap[ns]            m, each screw's nearest-sample signed distance to the terrain
@@ -82,22 +84,32 @@ out  wrenches[nl, 6]    N, N·m attraction + drag, world axes about link origins
 
 from __future__ import annotations
 
-import numpy as np
 from dataclasses import dataclass
+from enum import IntEnum
 from typing import Literal
 
+import numpy as np
 from pydantic import Field
 
-from snakesim.framework import Component, Input, Output
+from snakesim.framework import Component, Input, Output, Params, Uses
 
-from ..contact.robot_screws import RobotSource, screw_layout
+from ..contact.robot_screws import screw_layout
 from ..contact.screw_samples import ScrewContactSamples
+from ..multibody.robot_model import RobotModel
 from ..terrain.base import Terrain
 
 
 #: relative lever arm below which a wall-force moment direction is not imposed on the pre-load (see
 #: Settle._preload_torques)
 WEAK_ARM = 0.02
+
+
+class SettlePhase(IntEnum):
+    """The settle component's phase: state element 0 (as a float) and its ``phase`` output."""
+
+    SETTLING = 0       # gravity off, attraction springs and drag, joints free
+    LOADING = 1        # gravity off, springs released, pre-load torques with free joints
+    HOLDING = 2        # gravity on, set-points latched, pre-load as feed-forward
 
 
 @dataclass(frozen=True)
@@ -116,7 +128,7 @@ class AttractionSet:
         return cls(np.zeros((0, 3)), np.zeros((0, 3)))
 
 
-class SettleParams(RobotSource):
+class SettleParams(Params):
     k_attract: float = Field(2000.0, gt=0, description="N/m, attraction spring per screw")
     drag: float = Field(8.0, ge=0, description="1/s, ζ: mass-proportional drag while settling")
     gyration: float = Field(0.1, gt=0, description="m, r_g of the angular drag")
@@ -136,41 +148,38 @@ class SettleParams(RobotSource):
     per_ring: int = Field(12, ge=1, description="samples per ring")
 
 
-def _lay(p):
-    return screw_layout(p)
-
-
 class Settle(Component[SettleParams]):
     type_name = "placement_settle"
     Params = SettleParams
 
-    link_poses = Input(shape=lambda p: (_lay(p).nl, 7), unit=None)
-    link_velocities = Input(shape=lambda p: (_lay(p).nl, 6), unit=None)
-    joint_q = Input(shape=lambda p: (_lay(p).nj,), unit="rad")
+    robot = Uses(RobotModel, doc="the multibody's robot: link/joint order, masses, joint axes, screws")
+
+    link_poses = Input(shape=lambda c: (c.robot.nl, 7), unit=None)
+    link_velocities = Input(shape=lambda c: (c.robot.nl, 6), unit=None)
+    joint_q = Input(shape=lambda c: (c.robot.nj,), unit="rad")
     terrain = Input(type=Terrain)
-    drive = Input(shape=lambda p: (_lay(p).nj,), unit=None, default=0.0, names=lambda p: _lay(p).joints)
-    wrenches = Output(shape=lambda p: (_lay(p).nl, 6), unit=None, feedthrough=("link_poses", "link_velocities", "terrain"))
+    drive = Input(shape=lambda c: (c.robot.nj,), unit=None, default=0.0, names=lambda c: c.robot.joints)
+    wrenches = Output(shape=lambda c: (c.robot.nl, 6), unit=None, feedthrough=("link_poses", "link_velocities", "terrain"))
     gravity = Output(shape=(1,), unit="1", feedthrough=())
-    setpoint = Output(shape=lambda p: (_lay(p).nj,), unit=None, feedthrough=("joint_q", "drive"),
-                      names=lambda p: _lay(p).joints)
-    tau_ff = Output(shape=lambda p: (_lay(p).nj,), unit="N*m", feedthrough=(), names=lambda p: _lay(p).joints)
+    setpoint = Output(shape=lambda c: (c.robot.nj,), unit=None, feedthrough=("joint_q", "drive"),
+                      names=lambda c: c.robot.joints)
+    tau_ff = Output(shape=lambda c: (c.robot.nj,), unit="N*m", feedthrough=(), names=lambda c: c.robot.joints)
     phase = Output(shape=(1,), unit="1", feedthrough=())
     settle_time = Output(shape=(1,), unit="s", feedthrough=())
     hold_time = Output(shape=(1,), unit="s", feedthrough=())
-    gap = Output(shape=lambda p: (_lay(p).ns,), unit="m", feedthrough=("link_poses", "terrain"),
-                 names=lambda p: _lay(p).names)
+    gap = Output(shape=lambda c: (c.screws.ns,), unit="m", feedthrough=("link_poses", "terrain"),
+                 names=lambda c: c.screws.names)
     max_speed = Output(shape=(1,), unit="m/s", feedthrough=("link_velocities",))
     attraction = Output(type=AttractionSet, feedthrough=("link_poses", "terrain"), calc="calc_attraction")
 
     def setup(self):
-        from snakesim.components.control.robot_source import joint_kind, robot_layout
-
         p = self.p
         if self.rate is None:
             raise ValueError(f"{self.name}: placement_settle has discrete state: give it a rate (Hz), "
                              "best 1/dt (its drag is a damper)")
-        lay = self.layout = screw_layout(p)
-        tree = robot_layout(p).tree
+        robot = self.robot
+        lay = self.screws = robot.derived(screw_layout)
+        tree, links, joints = robot.tree, robot.links, robot.joints
         samples = [ScrewContactSamples(lay.radius[s], lay.length[s], p.rings, p.per_ring, lay.lead_angle[s],
                                        int(lay.hand[s]), lay.mount_R[s], lay.mount_p[s]) for s in range(lay.ns)]
         self._pts_B = np.concatenate([s.points for s in samples])          # (n, 3) in the parent body
@@ -181,23 +190,25 @@ class Settle(Component[SettleParams]):
         self._row = np.repeat(lay.parent_row, [len(s) for s in samples])   # parent link row per sample
         self._start = np.concatenate([[0], np.cumsum([len(s) for s in samples])[:-1]])
         self._screw_of = np.repeat(np.arange(lay.ns), [len(s) for s in samples])
-        self._mass = np.array([tree.links[tree.link_index[n]].mass for n in lay.links])
-        self._bend = np.array([joint_kind(j) == "bend" for j in lay.joints])
-        self._screw = np.array([joint_kind(j) == "screw" for j in lay.joints])
+        self._mass = np.array([tree.links[tree.link_index[n]].mass for n in links])
+        kinds = np.array(robot.joint_kinds)
+        self._bend = kinds == "bend"
+        self._screw = kinds == "screw"
         self._speed_screw = self._screw & (p.screw_hold == "speed")        # set-point 0 rad/s
-        self._nj, self._ns = lay.nj, lay.ns
+        self._nj, self._ns = robot.nj, lay.ns
         # pre-load map: joint k's child row and axis (child frame), and which screws lie beyond it
-        joints = [tree.joint_by_name[j] for j in lay.joints]
-        self._jrow = np.array([lay.links.index(j.child) for j in joints])
-        self._jaxis = np.array([j.axis for j in joints], dtype=float)
-        beyond = [set(tree.subtree(j.child)) for j in joints]
-        self._distal = np.array([[lay.links[r] in b for r in lay.parent_row] for b in beyond], dtype=float)
+        jts = [tree.joint_by_name[j] for j in joints]
+        self._jrow = np.array([robot.link_index(j.child) for j in jts])
+        self._jaxis = np.array([j.axis for j in jts], dtype=float)
+        beyond = [set(tree.subtree(j.child)) for j in jts]
+        self._distal = np.array([[links[r] in b for r in lay.parent_row] for b in beyond], dtype=float)
         self._T = 1.0 / self.rate
         self._need = int(np.ceil(p.min_contact_fraction * lay.ns - 1e-9))
-        self._seen = (None, np.full((lay.nl, 7), np.nan), None)      # (terrain, poses, nearest) of output()
+        self._seen = (None, np.full((robot.nl, 7), np.nan), None)    # (terrain, poses, nearest) of output()
 
     def discrete_state(self):
-        return np.concatenate([[0.0, -1.0, -1.0], np.zeros(2 * self._nj)])     # times < 0: not yet
+        # times < 0: not yet
+        return np.concatenate([[float(SettlePhase.SETTLING), -1.0, -1.0], np.zeros(2 * self._nj)])
 
     # -- geometry --------------------------------------------------------------------------------
     def _nearest(self, poses, terrain):
@@ -269,7 +280,8 @@ class Settle(Component[SettleParams]):
         if terrain is None:
             raise ValueError(f"{self.name}: input 'terrain' carries no Terrain; connect a terrain component's "
                              "'terrain' output to it")
-        latched, holding = xd[0] >= 1.0, xd[0] >= 2.0
+        phase = int(xd[0])
+        latched, holding = phase >= SettlePhase.LOADING, phase == SettlePhase.HOLDING
         phi, n, pts, rows = nearest = self._nearest(u.link_poses, terrain)
         if "attraction" in self.used_outputs:        # for calc_attraction at the same inputs
             self._seen = (terrain, u.link_poses.copy(), nearest)
@@ -304,7 +316,7 @@ class Settle(Component[SettleParams]):
         y.setpoint[:] = np.where(self._speed_screw, 0.0, u.joint_q)     # free joints: the PID only damps
 
     def calc_attraction(self, t, xd, u, y):
-        if xd[0] >= 1.0:
+        if int(xd[0]) != SettlePhase.SETTLING:
             y.attraction = AttractionSet.empty()
             return
         terrain, poses, nearest = self._seen
@@ -316,12 +328,13 @@ class Settle(Component[SettleParams]):
 
     def update(self, t, xd, u):
         p = self.p
-        if xd[0] >= 2.0:
+        phase = int(xd[0])
+        if phase == SettlePhase.HOLDING:
             return
-        if xd[0] >= 1.0:
+        if phase == SettlePhase.LOADING:
             if t - xd[1] >= p.load_time - 1e-12:
                 xd[3:3 + self._nj] = np.where(self._speed_screw, 0.0, u.joint_q)
-                xd[0] = 2.0
+                xd[0] = SettlePhase.HOLDING
             return
         phi, _, _, _ = self._nearest(u.link_poses, u.terrain)
         speed = self._speed(u.link_velocities)
@@ -334,11 +347,11 @@ class Settle(Component[SettleParams]):
         if quiet and t - xd[2] >= p.quiet_time - 1e-12:
             xd[3:3 + self._nj] = np.where(self._speed_screw, 0.0, u.joint_q)
             xd[3 + self._nj:] = np.where(self._screw, 0.0, self._preload_torques(u.link_poses, u.terrain))
-            xd[0], xd[1] = (2.0 if p.load_time <= 0.0 else 1.0), t
+            xd[0], xd[1] = (SettlePhase.HOLDING if p.load_time <= 0.0 else SettlePhase.LOADING), t
             return
         if t >= p.time_limit:
             worst = int(np.argmax(phi))
             self.stop(f"placement did not settle within time_limit {p.time_limit:g} s: {touching}/{self._ns} "
                       f"screws within contact_band {p.contact_band:g} m (need {self._need}; farthest "
-                      f"{self.layout.names[worst]} at {phi[worst]:.4f} m), fastest link {speed:.4f} m/s "
+                      f"{self.screws.names[worst]} at {phi[worst]:.4f} m), fastest link {speed:.4f} m/s "
                       f"(max_speed {p.max_speed:g}); raise time_limit or k_attract, or improve the shape guess")

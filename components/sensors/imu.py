@@ -16,6 +16,7 @@ in   link_rotations[nl, 3, 3], link_poses[nl, 7], link_velocities[nl, 6],
      link_accelerations[nl, 6]   from the multibody
      gravity[1]                  scale (default: params.gravity)
 out  angular_rate[3], specific_force[3], orientation[4]   (feedthrough)
+uses robot: RobotModel (the multibody's): the link row
 """
 
 from __future__ import annotations
@@ -23,16 +24,16 @@ from __future__ import annotations
 import numpy as np
 from pydantic import Field
 
-from snakesim.components.control.robot_source import RobotSource, link_names, match
-
-from snakesim.framework import Component, Input, Output
+from snakesim.components.control.joint_selection import match
+from snakesim.components.multibody.robot_model import RobotModel
+from snakesim.framework import Component, Input, Output, Params, Uses
 
 from .noise import noise_needs_rate, white_noise
 
 Vec3 = tuple[float, float, float]
 
 
-class ImuParams(RobotSource):
+class ImuParams(Params):
     link: str = Field("imu", description="link (frame) the IMU is mounted on")
     offset: Vec3 = Field((0.0, 0.0, 0.0), description="m, IMU position in the link frame")
     gravity: Vec3 = Field((0.0, 0.0, -9.81), description="m/s², world (as the multibody's)")
@@ -44,12 +45,13 @@ class ImuParams(RobotSource):
 
 
 def _nl(*tail):
-    return lambda p: (len(link_names(p)), *tail)
+    return lambda c: (c.robot.nl, *tail)
 
 
 class Imu(Component[ImuParams]):
     type_name = "imu"
     Params = ImuParams
+    robot = Uses(RobotModel)
 
     link_rotations = Input(shape=_nl(3, 3), unit="1")
     link_poses = Input(shape=_nl(7), unit=None)
@@ -62,11 +64,11 @@ class Imu(Component[ImuParams]):
 
     def setup(self):
         p = self.p
-        links = link_names(p)
+        links = self.robot.links
         if p.link not in links:
             match(links, p.link, f"{self.name}: link")      # raises, listing the links
             raise ValueError(f"{self.name}: link must name one link, not a pattern: '{p.link}'")
-        self._i = links.index(p.link)
+        self._i = self.robot.link_index(p.link)
         self._r = np.array(p.offset, dtype=float)
         self._g = np.array(p.gravity, dtype=float)
         self._bias = np.r_[p.gyro_bias, p.accel_bias].astype(float)

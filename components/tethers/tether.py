@@ -20,6 +20,7 @@ in   link_rotations[nl, 3, 3], link_poses[nl, 7], link_velocities[nl, 6]   from 
      attached[n]   0/1 per tether (default NaN: the params' schedule)
 out  wrenches[nl, 6]  N, N·m    (feedthrough)
      tension[n]  N,  length[n]  m
+uses robot: RobotModel (the multibody's): link names and rows
 """
 
 from __future__ import annotations
@@ -29,9 +30,8 @@ import math
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
-from snakesim.components.control.robot_source import RobotSource, link_names
-
-from snakesim.framework import Component, Input, Output
+from snakesim.components.multibody.robot_model import RobotModel
+from snakesim.framework import Component, Input, Output, Params, Uses
 
 Vec3 = tuple[float, float, float]
 
@@ -48,24 +48,25 @@ class TetherSpec(BaseModel):
     release: float | None = Field(None, description="s, released at (None: never)")
 
 
-class TetherParams(RobotSource):
+class TetherParams(Params):
     tethers: list[TetherSpec] = Field(..., min_length=1)
 
 
-def _nl6(p):
-    return (len(link_names(p)), 6)
+def _nl6(c):
+    return (c.robot.nl, 6)
 
 
-def _n(p):
-    return (len(p.tethers),)
+def _n(c):
+    return (len(c.p.tethers),)
 
 
 class Tethers(Component[TetherParams]):
     type_name = "tethers"
     Params = TetherParams
+    robot = Uses(RobotModel)
 
-    link_rotations = Input(shape=lambda p: (len(link_names(p)), 3, 3), unit="1")
-    link_poses = Input(shape=lambda p: (len(link_names(p)), 7), unit=None)
+    link_rotations = Input(shape=lambda c: (c.robot.nl, 3, 3), unit="1")
+    link_poses = Input(shape=lambda c: (c.robot.nl, 7), unit=None)
     link_velocities = Input(shape=_nl6, unit=None)
     attached = Input(shape=_n, unit="1", default=np.nan)
     wrenches = Output(shape=_nl6, unit=None, feedthrough=("link_rotations", "link_poses", "link_velocities",
@@ -74,7 +75,7 @@ class Tethers(Component[TetherParams]):
     length = Output(shape=_n, unit="m", feedthrough=True)
 
     def setup(self):
-        links = list(link_names(self.p))
+        links = self.robot.links
         ts = self.p.tethers
         bad = [t.link for t in ts if t.link not in links]
         if bad:
@@ -84,7 +85,7 @@ class Tethers(Component[TetherParams]):
                 raise ValueError(f"{self.name}: tethers[{j}]: offset, anchor and attach must be finite")
             if t.release is not None and not t.release > t.attach:
                 raise ValueError(f"{self.name}: tethers[{j}]: release {t.release:g} s must come after attach {t.attach:g} s")
-        self._li = np.array([links.index(t.link) for t in ts], dtype=np.int64)
+        self._li = np.array([self.robot.link_index(t.link) for t in ts], dtype=np.int64)
         self._r = np.array([t.offset for t in ts], dtype=float)
         self._A = np.array([t.anchor for t in ts], dtype=float)
         self._k = np.array([t.stiffness for t in ts])

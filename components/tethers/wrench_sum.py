@@ -6,33 +6,35 @@ The ``sum`` block adds vectors [n]; this one keeps the [nl, 6] shape so the
 element names and the build-time shape check still hold. Unconnected inputs
 read zero.
 
-nl is given, or taken from the robot source keys (as the multibody's).
+nl is the ``nl`` param when given, else the robot's (the multibody's link
+count): in a scene with a multibody it needs no params; without a robot, give
+``nl``.
 
 in   u0..u3[nl, 6]  (default 0)
 out  y[nl, 6]       (feedthrough)
+uses robot: RobotModel (the multibody's), optional: nl when the param is not given
 """
 
 from __future__ import annotations
 
 from pydantic import Field
 
-from snakesim.components.control.robot_source import RobotSource, link_names
+from snakesim.components.multibody.robot_model import RobotModel
+from snakesim.framework import Component, Input, Output, Params, Uses
 
-from snakesim.framework import Component, Input, Output
-
-
-class WrenchSumParams(RobotSource):
-    nl: int | None = Field(None, ge=1, description="number of links; default: the robot's (robot source keys)")
+class WrenchSumParams(Params):
+    nl: int | None = Field(None, ge=1, description="number of links; default: the robot's")
     signs: list[float] = Field(default_factory=lambda: [1.0, 1.0, 1.0, 1.0], min_length=1, max_length=4)
 
 
-def _shape(p):
-    return (p.nl if p.nl is not None else len(link_names(p)), 6)
+def _shape(c):
+    return (c.nl, 6)
 
 
 class WrenchSum(Component[WrenchSumParams]):
     type_name = "wrench_sum"
     Params = WrenchSumParams
+    robot = Uses(RobotModel, required=False)
     u0 = Input(shape=_shape, unit=None, default=0.0)
     u1 = Input(shape=_shape, unit=None, default=0.0)
     u2 = Input(shape=_shape, unit=None, default=0.0)
@@ -40,6 +42,13 @@ class WrenchSum(Component[WrenchSumParams]):
     y = Output(shape=_shape, unit=None, feedthrough=True)
 
     def setup(self):
+        if self.p.nl is not None:
+            self.nl = self.p.nl
+        elif self.robot is not None:
+            self.nl = self.robot.nl
+        else:
+            raise ValueError(f"{self.name}: no link count: give 'nl', or put it in a scene with a multibody "
+                             f"(it takes the robot's)")
         self._terms = [(f"u{i}", s) for i, s in enumerate(self.p.signs)]
 
     def output(self, t, x, u, y):

@@ -1,20 +1,20 @@
 """Adds a viewer sink to a resolved scene: what ``snakesim run --viz TARGET`` does before the build.
 
-Components are found by what their class declares, not by name:
+Components are found by what their classes declare, never by their names or port names:
 
-    robot     the first component with a ``link_poses`` output (the multibody):
-              its link_poses are wired in and its robot source keys copied, so the
-              sink draws the same URDF
-    terrain   the first structured output of a Terrain type
-    attraction the first structured output of placement_settle's AttractionSet type
-              (checked first: it too has ``points`` and ``forces``)
-    contacts  the first other structured output whose type has ``points`` and
-              ``forces`` fields (ContactSet, any contact back end)
-    tethers   the first structured output with ``strips`` or ``points`` (and no
-              ``forces``) on a component or port whose name says "tether"; else a
-              component whose params list ``tethers: [{link, offset, anchor}]``
-              (the tethers component): drawn as straight ropes from the link poses
-    series    every recorded signal ('comp.port'), one plot each
+    robot      the component that provides the RobotModel resource (``Provides(RobotModel)``:
+               the multibody or placed_multibody; with several, the first, named in the
+               sink's ``uses: {robot: NAME}``). The sink uses that robot (its links and URDF
+               visuals), its numeric ``link_poses`` output is wired in and its name is the
+               robot's entity name (world/physical/<name>)
+    terrain    the first structured output of type Terrain
+    contacts   the first structured output of type ContactSet (any contact back end)
+    attraction the first structured output of type AttractionSet (placement_settle's springs)
+    tethers    a ``tethers`` component (class Tethers): its ropes (params ``tethers``: link,
+               offset, anchor) drawn as straight lines from the link poses
+    series     every recorded signal ('comp.port'), one plot each
+
+The types are imported from their packages' public modules (STRUCTURED below).
 
 The sink runs at the viewer rate rounded to a whole number of base steps
 (30 Hz at dt = 1 ms is every 33 steps: 30.30 Hz), chosen so the scene's
@@ -33,7 +33,6 @@ from .target import VizTarget
 
 VIEWER_RATE_HZ = 30.0
 MAX_PHASES = 4096        # the scheduler's limit on distinct tick patterns (framework/plan.py)
-ROBOT_KEYS = ("urdf", "design", "modules", "head", "robot")
 
 
 @dataclasses.dataclass
@@ -48,10 +47,37 @@ class Attached:
     rate: float = VIEWER_RATE_HZ
 
 
-def _fields(cls) -> set[str]:
-    if dataclasses.is_dataclass(cls):
-        return {f.name for f in dataclasses.fields(cls)}
-    return set(getattr(cls, "__annotations__", {})) | {n for n in dir(cls) if not n.startswith("_")}
+def structured_inputs() -> dict[str, type]:
+    """Sink input -> the structured type whose outputs are wired to it."""
+    from snakesim.components.contact import ContactSet
+    from snakesim.components.placement import AttractionSet
+    from snakesim.components.terrain import Terrain
+
+    return {"terrain": Terrain, "contacts": ContactSet, "attraction": AttractionSet}
+
+
+def provides_robot(cls) -> bool:
+    """Whether a component class provides the robot (a RobotModel resource)."""
+    from snakesim.components.multibody.robot_model import RobotModel
+
+    return any(issubclass(prov.kind, RobotModel) for prov in getattr(cls, "provides", {}).values())
+
+
+def tether_lines(cls, params: dict) -> list[dict]:
+    """Tie points and anchors of a ``tethers`` component's ropes ([{link, offset, anchor}]), read
+    through its own Params; [] for any other component, or when its params do not validate (the
+    build reports those, naming file and key)."""
+    from pydantic import ValidationError
+
+    from snakesim.components.tethers import Tethers
+
+    if not (isinstance(cls, type) and issubclass(cls, Tethers)):
+        return []
+    try:
+        ropes = cls.Params(**(params or {})).tethers
+    except (ValidationError, TypeError, ValueError):
+        return []
+    return [{"link": r.link, "offset": list(r.offset), "anchor": list(r.anchor)} for r in ropes]
 
 
 def _classes(resolved: Resolved, registry):
@@ -60,16 +86,6 @@ def _classes(resolved: Resolved, registry):
             yield name, spec, registry.component(spec.type)
         except Exception:            # unknown type: the build reports it, naming file and key
             continue
-
-
-def _tether_lines(params: dict) -> list[dict]:
-    """Tie points and anchors of a tethers component's ropes (params.tethers: [{link, offset, anchor}])."""
-    ropes = params.get("tethers")
-    if not isinstance(ropes, list):
-        return []
-    out = [{"link": r["link"], "offset": list(r.get("offset", (0.0, 0.0, 0.0))), "anchor": list(r["anchor"])}
-           for r in ropes if isinstance(r, dict) and "link" in r and "anchor" in r]
-    return out if len(out) == len(ropes) else []
 
 
 def viewer_period(dt: float, rates, target_hz: float = VIEWER_RATE_HZ) -> int:
@@ -91,8 +107,6 @@ def viewer_period(dt: float, rates, target_hz: float = VIEWER_RATE_HZ) -> int:
 def attach_viewer(resolved: Resolved, target: VizTarget, registry=None, name: str = "viz",
                   params: dict | None = None) -> Attached:
     """Add a ``rerun_viewer`` component to ``resolved`` and wire it (in place)."""
-    from snakesim.components.placement.settle import AttractionSet
-    from snakesim.components.terrain import Terrain
     from snakesim.framework.registry import default_registry
 
     registry = registry or default_registry()
@@ -101,35 +115,31 @@ def attach_viewer(resolved: Resolved, target: VizTarget, registry=None, name: st
         name, k = f"{base}_{k}", k + 1
     found = Attached(name)
     sink = {"target": str(target)}
+    uses = {}
     conns = []
+    kinds = structured_inputs()
     for comp, spec, cls in _classes(resolved, registry):
+        if found.robot is None and provides_robot(cls):
+            found.robot = comp
+            uses["robot"] = comp             # explicit: the scene may have several providers
+            sink["robot_component"] = comp
+            poses = cls.outputs.get("link_poses")
+            if poses is not None and not isinstance(poses.signal, Structured):
+                conns.append((f"{comp}.link_poses", f"{name}.link_poses"))
         for port, out in cls.outputs.items():
             sig = out.signal
-            if found.robot is None and port == "link_poses" and not isinstance(sig, Structured):
-                found.robot = comp
-                sink["robot_component"] = comp
-                sink.update({key: spec.params[key] for key in ROBOT_KEYS if key in spec.params})
-                conns.append((f"{comp}.link_poses", f"{name}.link_poses"))
-            if not isinstance(sig, Structured):
+            if not (isinstance(sig, Structured) and isinstance(sig.cls, type)):
                 continue
-            fields = _fields(sig.cls)
-            if found.terrain is None and isinstance(sig.cls, type) and issubclass(sig.cls, Terrain):
-                found.terrain = comp
-                conns.append((f"{comp}.{port}", f"{name}.terrain"))
-            elif isinstance(sig.cls, type) and issubclass(sig.cls, AttractionSet):
-                if found.attraction is None:           # never taken for contacts, even when a second one
-                    found.attraction = comp
-                    conns.append((f"{comp}.{port}", f"{name}.attraction"))
-            elif found.contacts is None and {"points", "forces"} <= fields:
-                found.contacts = comp
-                conns.append((f"{comp}.{port}", f"{name}.contacts"))
-            elif (found.tethers is None and ("strips" in fields or "points" in fields)
-                  and "tether" in f"{spec.type} {comp} {port}".lower()):
+            for role, kind in kinds.items():
+                if getattr(found, role) is None and issubclass(sig.cls, kind):
+                    setattr(found, role, comp)
+                    conns.append((f"{comp}.{port}", f"{name}.{role}"))
+                    break
+        if found.tethers is None:
+            lines = tether_lines(cls, spec.params)
+            if lines:
                 found.tethers = comp
-                conns.append((f"{comp}.{port}", f"{name}.tethers"))
-        if found.tethers is None and _tether_lines(spec.params):
-            found.tethers = comp
-            sink["tether_lines"] = _tether_lines(spec.params)
+                sink["tether_lines"] = lines
     for i, (ref, _) in enumerate(resolved.record):
         found.series.append(ref)
         conns.append((ref, f"{name}.s{i}"))
@@ -139,7 +149,7 @@ def attach_viewer(resolved: Resolved, target: VizTarget, registry=None, name: st
     sink.update(params or {})
     period = viewer_period(sim.dt, [s.rate for s in resolved.components.values()])
     found.rate = 1.0 / (period * sim.dt)
-    resolved.components[name] = ComponentSpec(type="rerun_viewer", params=sink, rate=found.rate)
+    resolved.components[name] = ComponentSpec(type="rerun_viewer", params=sink, rate=found.rate, uses=uses)
     resolved.connections.extend((s, d, "--viz") for s, d in conns)
     resolved.where[name] = "--viz"
     return found

@@ -2,11 +2,12 @@
 
 Reads ``config.yaml`` (the resolved configuration) and ``signals.csv``:
 
-- robot geometry: rebuilt from the robot component's source keys (the
-  component with a ``link_poses`` output), exactly as the live sink does;
+- robot: the component that provides the RobotModel (``Provides(RobotModel)``,
+  the multibody), built from its params; its robot's links and URDF visuals
+  (``robot.derived(link_meshes)``), exactly as the live sink draws them;
 - link poses, in order of preference: the recorded ``<robot>.link_poses``
-  columns; forward kinematics of recorded ``<robot>.q`` through the robot
-  component itself; otherwise the initial pose only (with a note);
+  columns; forward kinematics of recorded ``<robot>.q`` through that built
+  component; otherwise its initial pose only (with a note);
 - terrain: the component with a Terrain output, built from its params;
 - tethers: straight ropes from a tethers component's params and the poses;
 - one plot per recorded signal, every row of every column; the real-time
@@ -32,8 +33,9 @@ from snakesim.framework.harness import Harness
 from snakesim.framework.signals import Structured
 
 from . import entities as E
-from .robot_geometry import RobotSource, link_meshes
-from .sink import RerunSinkParams, link_names
+from .attach import provides_robot, tether_lines
+from .robot_geometry import link_meshes
+from .sink import RerunSinkParams, robot_visuals
 from .target import VizTarget, open_recording
 
 POSE_FIELDS = ("x", "y", "z", "qx", "qy", "qz", "qw")
@@ -123,13 +125,13 @@ def replay(run_dir, target: VizTarget | None = None, body_frames: bool = False, 
     records = [r for r in cfg.get("record", []) if isinstance(r, str)]
 
     # robot ---------------------------------------------------------------------------
-    robot = next((n for n, c in classes.items() if "link_poses" in c.outputs), None)
-    links, meshes, poses, pose_t = (), [], None, t
+    robot = next((n for n, c in classes.items() if provides_robot(c)), None)
+    links, meshes, visuals, poses, pose_t = (), [], None, None, t
     if robot is not None:
-        params = cfg["components"][robot].get("params", {})
-        links = link_names(params)
-        meshes = link_meshes(RobotSource.of(params))
-        poses, pose_t, note = _robot_poses(robot, classes[robot], params, columns, data, records, links)
+        comp = build_robot(robot, classes[robot], cfg["components"][robot].get("params", {}))
+        links = comp.robot.links
+        meshes, visuals = comp.robot.derived(link_meshes), comp.robot.derived(robot_visuals)
+        poses, pose_t, note = _robot_poses(comp, columns, data, records)
         if note:
             notes.append(note)
 
@@ -155,17 +157,16 @@ def replay(run_dir, target: VizTarget | None = None, body_frames: bool = False, 
     # tethers: straight ropes from a tethers component's params and the poses
     ropes = None
     if poses is not None:
-        from .attach import _tether_lines
         from .sink import _ropes
 
-        lines = next((_tether_lines(spec.get("params", {})) for spec in cfg["components"].values()
-                      if _tether_lines(spec.get("params", {}))), [])
+        lines = next((ln for ln in (tether_lines(cls, cfg["components"][n].get("params", {}))
+                                    for n, cls in classes.items()) if ln), [])
         ropes = _ropes(lines, links) if lines else None
 
     first = poses[0, :, :3] if poses is not None and poses.shape[1] else np.zeros((1, 3))
     bp = default_blueprint(first, [E.series_path(s) for s, _, _ in series])
     rec, used = open_recording(target, "snakesim", blueprint=bp)
-    log = SceneLog(rec, robot=robot, link_names=links, meshes=meshes,
+    log = SceneLog(rec, robot=robot, link_names=links, meshes=meshes, visuals=visuals,
                    series=[(s, names, len(idx)) for s, names, idx in series],
                    body_frames=body_frames, frame_length=vp.frame_length, force_scale=vp.force_scale,
                    tethers=ropes is not None)
@@ -186,15 +187,26 @@ def replay(run_dir, target: VizTarget | None = None, body_frames: bool = False, 
     return ReplayReport(used, len(t), [s for s, _, _ in series], notes)
 
 
-def _robot_poses(robot, cls, params, columns, data, records, links):
-    """(poses (n, nl, 7), times (n,), note) from the recording, or computed from the robot component."""
+def build_robot(name: str, cls, params: dict):
+    """The robot-providing component of a finished run, built from its recorded params (its
+    ``robot`` is the RobotModel the run used)."""
+    try:
+        return cls(name, params)
+    except Exception as e:
+        raise SnakesimError(f"replay: cannot rebuild the robot component '{name}' ({cls.type_name}) from "
+                            f"config.yaml: {e}") from None
+
+
+def _robot_poses(comp, columns, data, records):
+    """(poses (n, nl, 7), times (n,), note) from the recording, or computed through ``comp`` (the
+    built robot-providing component, see :func:`build_robot`)."""
     t = data[:, 0]
+    robot, links = comp.name, comp.robot.links
     ref = f"{robot}.link_poses"
     if ref in records:
         idx, _ = signal_columns(columns, ref)
         if len(idx) == 7 * len(links):
             return data[:, idx].reshape(len(t), len(links), 7), t, None
-    comp = cls(robot, params)
     h = Harness(comp)
     calc = getattr(comp, comp.outputs["link_poses"].calc or "output")
     nq = h.y.q.size if hasattr(h.y, "q") else None

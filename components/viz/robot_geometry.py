@@ -1,5 +1,8 @@
 """A robot's visual geometry from its URDF: one triangle mesh per link, in the link frame.
 
+Built from the :class:`RobotModel` the viewer is handed (its ``urdf`` text, ``base_dir`` and
+``screw_meshes``), once per robot: ``robot.derived(link_meshes)``.
+
 Each ``<link>`` (document order, the order of the multibody's ``link_poses``
 rows) gets the union of its ``<visual>`` elements: cylinders (URDF: axis z,
 centred), boxes, spheres and mesh files (STL/OBJ/..., ``scale`` honoured),
@@ -20,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
+from snakesim.components.multibody.robot_model import RobotModel
 from snakesim.components.multibody.urdf import rpy_matrix
 
 DEFAULT_RGBA = (0.7, 0.7, 0.72, 1.0)
@@ -38,48 +42,16 @@ class LinkMesh:
     colors: np.ndarray
 
 
-@dataclasses.dataclass(frozen=True)
-class RobotSource:
-    """The robot as the multibody component names it (same keys as its params)."""
+def link_meshes(robot: RobotModel) -> list[LinkMesh]:
+    """One :class:`LinkMesh` per URDF link of ``robot`` that has visuals, document order.
 
-    urdf: str | None = None
-    design: str | None = None
-    modules: int | None = None
-    head: bool | None = None
-    robot: dict = dataclasses.field(default_factory=dict)
-
-    @classmethod
-    def of(cls, params) -> "RobotSource":
-        get = params.get if isinstance(params, dict) else lambda k, d=None: getattr(params, k, d)
-        return cls(get("urdf"), get("design"), get("modules"), get("head"), dict(get("robot") or {}))
-
-    @property
-    def empty(self) -> bool:
-        return self.urdf is None and self.design is None
-
-
-def load_source(src: RobotSource) -> tuple[str, Path, dict]:
-    """(URDF text, folder mesh names are relative to, {mesh file name: ScrewGeometry})."""
-    from snakesim.robots import load_robot
+    Built once per robot: call it as ``robot.derived(link_meshes)`` (the sink and replay do), so
+    every viewer of the same robot shares the meshes. A URDF given as text has no folder; its
+    relative mesh names resolve against snakesim's own URDF folder."""
     from snakesim.robots.description import URDF_DIR
 
-    if src.design is not None:
-        desc = load_robot(src.design, modules=src.modules, head=src.head, urdf=src.urdf, **src.robot)
-        return desc.urdf, desc.base_dir, dict(desc.screw_meshes)
-    if src.urdf is None:
-        raise ValueError("no robot: give 'urdf' (text or path) or 'design'")
-    if src.urdf.lstrip().startswith("<"):
-        return src.urdf, URDF_DIR, {}
-    path = Path(src.urdf)
-    if not path.is_file():
-        raise FileNotFoundError(f"URDF file '{path}' does not exist")
-    return path.read_text(encoding="utf-8"), path.resolve().parent, {}
-
-
-def link_meshes(src: RobotSource) -> list[LinkMesh]:
-    """One :class:`LinkMesh` per URDF link that has visuals, document order."""
-    text, base_dir, screws = load_source(src)
-    return meshes_from_urdf(text, base_dir, screws)
+    base = robot.base_dir if robot.base_dir is not None else URDF_DIR
+    return meshes_from_urdf(robot.urdf, Path(base), robot.screw_meshes)
 
 
 def meshes_from_urdf(text: str, base_dir: Path, screws: dict | None = None) -> list[LinkMesh]:

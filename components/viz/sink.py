@@ -7,17 +7,18 @@ decimates itself to ``viewer_rate``), so the simulation pays for logging
 30 times per simulated second, not every step. ``snakesim run --viz ...``
 adds and wires it (:mod:`.attach`); in YAML::
 
-    viz: {type: rerun_viewer, rate: 30.30303, params: {target: "save run.rrd", design: eels-1.0, modules: 10}}
+    viz: {type: rerun_viewer, rate: 30.30303, params: {target: "save run.rrd", robot_component: robot}}
     connections: [robot.link_poses -> viz.link_poses, ground.terrain -> viz.terrain]
 
+uses robot: RobotModel (the multibody's; optional): its links are the rows of link_poses and its
+     URDF visuals the meshes drawn (``robot.derived(link_meshes)``: built once per robot); with
+     several providers name one with ``uses: {robot: NAME}``. No robot in the scene: no links drawn
 in   link_poses[nl, 7]  m, 1  [x, y, z, qx, qy, qz, qw] per link, world (the multibody's; optional)
      terrain            Terrain, drawn once as a static mesh (optional)
-     contacts           any structured value with ``points`` (m, 3) and ``forces`` (m, 3) N,
-                        e.g. ContactSet; split into normal and friction arrows when it also
-                        has ``normals`` and ``normal_force`` (optional)
-     attraction         placement attraction springs: any structured value with ``points`` (m, 3)
-                        and ``forces`` (m, 3) N (placement_settle's AttractionSet), drawn as
-                        yellow arrows under world/debug/attraction (optional)
+     contacts           ContactSet (any contact back end): points and forces, split into normal
+                        and friction arrows (optional)
+     attraction         AttractionSet: placement_settle's attraction springs, points (m, 3) and
+                        forces (m, 3) N, drawn as yellow arrows under world/debug/attraction (optional)
      tethers            any structured value with ``strips``/``points`` polylines (optional);
                         without it, params.tether_lines are drawn as straight segments from
                         each tie point (link pose · offset) to its anchor
@@ -38,20 +39,21 @@ ornamental contract: :mod:`.entities`.
 
 from __future__ import annotations
 
-import json
 import sys
 import time
 import weakref
-from functools import lru_cache
 
 import numpy as np
 from pydantic import Field, field_validator
 
+from snakesim.components.contact import ContactSet
+from snakesim.components.multibody.robot_model import RobotModel
+from snakesim.components.placement import AttractionSet
 from snakesim.components.terrain import Terrain
-from snakesim.framework import Component, Input, Params
+from snakesim.framework import Component, Input, Params, Uses
 
 from . import entities as E
-from .robot_geometry import RobotSource, link_meshes, load_source
+from .robot_geometry import link_meshes
 from .target import VizTargetError, open_recording, parse_target
 
 Vec3 = tuple[float, float, float]
@@ -64,13 +66,9 @@ class RerunSinkParams(Params):
     viewer_rate: float = Field(30.0, gt=0, description="Hz; frames per simulated second when the component has no rate")
     application_id: str = "snakesim"
     recording_id: str | None = Field(None, description="rerun recording id (default: a fresh one per run)")
-    # the robot link_poses come from: the multibody's source keys and component name
-    robot_component: str = Field("robot", description="entity name of the robot: world/physical/<this>")
-    urdf: str | None = Field(None, description="URDF text or path (as the multibody's)")
-    design: str | None = Field(None, description="snakesim.robots design (as the multibody's)")
-    modules: int | None = Field(None, ge=1)
-    head: bool | None = None
-    robot: dict = Field(default_factory=dict, description="robot generator parameters (as the multibody's)")
+    # the robot itself is the RobotModel resource (uses robot); this only names its entity
+    robot_component: str = Field("robot", description="entity name of the robot: world/physical/<this> "
+                                                      "(--viz: the component that provides the robot)")
     # what to draw
     terrain_extent: float = Field(4.0, gt=0, description="m: unbounded terrains drawn this far around the centre")
     terrain_cell: float = Field(0.25, gt=0, description="m: checkerboard cell of drawn terrain")
@@ -96,21 +94,12 @@ class RerunSinkParams(Params):
         return v
 
 
-@lru_cache(maxsize=16)
-def _link_names(key: str) -> tuple[str, ...]:
-    import xml.etree.ElementTree as ET
+def robot_visuals(robot: RobotModel) -> dict:
+    """{link: rr.Mesh3D} of the robot's link meshes: converted to arrow once per robot
+    (``robot.derived(robot_visuals)``), not once per viewer."""
+    from .scene_log import link_visuals
 
-    src = RobotSource(**json.loads(key))
-    if src.empty:
-        return ()
-    text, _, _ = load_source(src)
-    return tuple(link.get("name") for link in ET.fromstring(text).findall("link"))
-
-
-def link_names(p) -> tuple[str, ...]:
-    """The URDF's links in document order: the rows of the multibody's link_poses."""
-    src = RobotSource.of(p)
-    return _link_names(json.dumps(src.__dict__, sort_keys=True, default=str))
+    return link_visuals(robot.derived(link_meshes))
 
 
 def series_input_name(i: int) -> str:
@@ -122,17 +111,20 @@ class RerunSink(Component[RerunSinkParams]):
     Params = RerunSinkParams
     is_sink = True
 
-    link_poses = Input(shape=lambda p: (len(link_names(p)), 7), unit=None, default=0.0,
+    robot = Uses(RobotModel, required=False, doc="the robot drawn: link rows and URDF visuals")
+
+    link_poses = Input(shape=lambda c: (len(c.links), 7), unit=None, default=0.0,
                        doc="[x, y, z, qx, qy, qz, qw] per link, world")
     terrain = Input(type=Terrain, required=False, doc="drawn once, static")
-    contacts = Input(type=object, required=False, doc="anything with points (m,3) and forces (m,3)")
+    contacts = Input(type=ContactSet, required=False, doc="contact points and forces, any contact back end")
     tethers = Input(type=object, required=False, doc="anything with strips/points polylines")
-    attraction = Input(type=object, required=False, doc="placement springs: points (m,3), forces (m,3)")
+    attraction = Input(type=AttractionSet, required=False, doc="placement springs: points (m,3), forces (m,3)")
 
     def setup(self):
         p = self.p
         self.target = parse_target(p.target)
-        self.links = link_names(p)
+        robot = self.robot
+        self.links = robot.links if robot is not None else ()
         # series inputs are per instance: one numeric input of any shape per signal
         extra = {}
         for i, _ in enumerate(p.series):
@@ -144,10 +136,8 @@ class RerunSink(Component[RerunSinkParams]):
         # the slow parts (mesh building, rerun's import: ~2 s) happen at build time, not in the run
         import rerun.blueprint  # noqa: F401
 
-        self._meshes = link_meshes(RobotSource.of(p)) if self.links else []
-        from .scene_log import link_visuals
-
-        self._visuals = link_visuals(self._meshes)    # arrow conversion once, not per recording
+        self._meshes = robot.derived(link_meshes) if robot is not None else []
+        self._visuals = robot.derived(robot_visuals) if robot is not None else {}   # arrow conversion once
         self._log = None
         self._finalizer = None
         self._last_t = -np.inf

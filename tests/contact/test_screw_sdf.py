@@ -10,10 +10,12 @@ import pytest
 from snakesim.components.contact import ScrewSdfContact, body_wrenches
 from snakesim.components.contact.robot_screws import RobotScrewError
 from snakesim.components.multibody import Multibody
+from snakesim.components.multibody.robot_model import RobotModel
 from snakesim.components.terrain import load_terrain
 from snakesim.framework import Harness
 
 ROBOT = {"design": "eels-1.0", "modules": 2, "head": False}
+MODEL = RobotModel.load(**ROBOT)
 ICE = {"kind": "plane", "materials": [{"name": "ice", "k": 1.0e5, "c": 1.0e3, "mu": 0.3, "ev_a": 3.0, "ev_b": 0.01}]}
 
 
@@ -28,7 +30,7 @@ def robot_state(z=0.0895, screw_angles=(0.3, -1.1), screw_rates=(2.0, -3.0), rol
 
 
 def contact(**params):
-    h = Harness(ScrewSdfContact, dict(ROBOT, **params), name="contact")
+    h = Harness(ScrewSdfContact, params, name="contact", uses={"robot": MODEL})
     h.inputs.terrain = load_terrain(ICE)
     return h
 
@@ -44,7 +46,7 @@ def test_forces_do_not_depend_on_the_spin_angle():
     h = contact()
     _, a = robot_state(screw_angles=(0.0, 0.0))
     _, b = robot_state(screw_angles=(1.234, -2.5))
-    rows = [h.c.layout.links.index(n) for n in ("screw_front_link_00", "screw_front_link_01")]
+    rows = [h.c.robot.link_index(n) for n in ("screw_front_link_00", "screw_front_link_01")]
     assert not np.allclose(a["link_poses"][rows, 3:], b["link_poses"][rows, 3:])   # the screws did turn
     ya, yb = feed(h, a), feed(h, b)
     assert ya["contacts"][0] > 0
@@ -85,7 +87,7 @@ def test_normal_force_is_the_penalty_spring_at_rest():
     out = mb.outputs()
     h = contact(rings=3, per_ring=8)
     y = feed(h, out)
-    n = 3 * h.c.layout.ns
+    n = 3 * h.c.screws.ns
     assert y["contacts"][0] == n
     assert y["normal_force"][0] == pytest.approx(n * 1.0e5 * 1e-4, rel=1e-9)
 
@@ -114,7 +116,7 @@ def test_broad_phase_skips_a_robot_far_from_the_ground_and_changes_nothing_in_co
     y_on, y_off = feed(on, tilted), feed(off, tilted)
     assert y_on["contacts"][0] > 0
     np.testing.assert_allclose(y_on["wrenches"], y_off["wrenches"], rtol=0, atol=1e-12)
-    assert 0 < on.c.stats["screws_tested"] < off.c.stats["screws_tested"] == on.c.layout.ns
+    assert 0 < on.c.stats["screws_tested"] < off.c.stats["screws_tested"] == on.c.screws.ns
 
 
 def test_material_override_replaces_the_terrain_value():
@@ -131,16 +133,16 @@ def test_material_override_replaces_the_terrain_value():
 
 def test_a_bare_urdf_is_refused_with_what_to_give():
     with pytest.raises(RobotScrewError, match="give 'design'"):
-        Harness(ScrewSdfContact, {"urdf": "<robot name='x'><link name='a'/></robot>"})
+        Harness(ScrewSdfContact, {}, uses={"robot": RobotModel.load(urdf="<robot name='x'><link name='a'/></robot>")})
 
 
 def test_a_design_without_screws_is_refused():
     with pytest.raises(RobotScrewError, match="has no screws"):
-        Harness(ScrewSdfContact, {"design": "mini-eels-1.0", "modules": 2})
+        Harness(ScrewSdfContact, {}, uses={"robot": RobotModel.load(design="mini-eels-1.0", modules=2)})
 
 
 def test_an_unconnected_terrain_is_named():
-    h = Harness(ScrewSdfContact, ROBOT, name="contact")
+    h = Harness(ScrewSdfContact, {}, name="contact", uses={"robot": MODEL})
     _, out = robot_state()
     with pytest.raises(ValueError, match="contact: input 'terrain'"):
         feed(h, out)
@@ -148,4 +150,4 @@ def test_an_unconnected_terrain_is_named():
 
 def test_bad_sampling_parameters_are_rejected():
     with pytest.raises(ValueError, match="per_ring"):
-        Harness(ScrewSdfContact, dict(ROBOT, per_ring=0))
+        Harness(ScrewSdfContact, dict(per_ring=0), uses={"robot": MODEL})

@@ -95,9 +95,8 @@ def scene(tmp_path, registry, *, terrain, base, omega=0.0, lead=0.35, material="
     components:
       terrain: {{type: terrain, params: {{spec: {terrain}}}}}
       robot: {{type: multibody, params: {{{ROBOT}, robot: {{lead_angle: {lead}}}, {base}}}}}
-      drive: {{type: screw_drive, params: {{{ROBOT}, robot: {{lead_angle: {lead}}}, omega: {omega}}}}}
-      contact: {{type: screw_sdf_contact, params: {{{ROBOT}, robot: {{lead_angle: {lead}}}, v_eps: {v_eps},
-                 material: {material}}}}}{rail_part}
+      drive: {{type: screw_drive, params: {{omega: {omega}}}}}
+      contact: {{type: screw_sdf_contact, params: {{v_eps: {v_eps}, material: {material}}}}}{rail_part}
     connections:
       - terrain.terrain -> contact.terrain
       - robot.link_poses -> contact.link_poses
@@ -110,7 +109,7 @@ def scene(tmp_path, registry, *, terrain, base, omega=0.0, lead=0.35, material="
     path = tmp_path / "scene.yaml"
     path.write_text(textwrap.dedent(text).lstrip("\n"))
     session = load_session(path, registry=registry)
-    assert session.plan.components["robot"].link_names.__len__() == nl
+    assert session.plan.components["robot"].robot.nl == nl
     return session, session.run()
 
 
@@ -142,7 +141,7 @@ def test_straight_robot_drives_at_the_steady_axial_speed(tmp_path, registry, lea
                        lead=lead, material=f"{{ev_a: {k}}}", duration=1.2, rail=True)
     assert r.summary["completed"], r.summary
     t, com = r["t"], r["robot.com"]
-    lay = session.plan.components["contact"].layout
+    lay = session.plan.components["contact"].screws
     late = t >= 0.9
     u = np.polyfit(t[late], com[late, 0], 1)[0]            # mean axial speed over the window
     spin = (r["robot.joint_v"][late][:, lay.spin_dof] * lay.spin_mult).mean(axis=0)      # (ns,) rad/s

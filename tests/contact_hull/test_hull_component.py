@@ -5,6 +5,7 @@ import pytest
 
 from snakesim.components.contact.hull import HullContact
 from snakesim.components.multibody import Multibody
+from snakesim.components.multibody.robot_model import RobotModel
 from snakesim.components.multibody.urdf import MultibodyModelError
 from snakesim.components.terrain import load_terrain
 from snakesim.framework.harness import Harness
@@ -22,7 +23,7 @@ def _urdf(geometry, mass=2.0, rpy="0 0 0"):
 def _settle(urdf, z0, t_end=0.3, dt=1e-4, **hull):
     """Drop a free body on the plane and integrate (semi-implicit Euler) until it rests."""
     mb = Harness(Multibody, {"urdf": urdf, "base_position": (0.0, 0.0, z0)})
-    hc = Harness(HullContact, {"urdf": urdf, **hull})
+    hc = Harness(HullContact, hull, uses={"robot": mb.c.robot})
     hc.inputs.terrain = load_terrain(PLANE)
     nq, nv = mb.c._nq, mb.c._nv
     x, out = mb.x, np.empty_like(mb.x)
@@ -68,7 +69,7 @@ ROBOT = {"design": "eels-1.0", "modules": 4}
 def straight():
     mb = Harness(Multibody, dict(ROBOT, base_position=(0.0, 0.0, 5.0)))
     o = mb.outputs()
-    hc = Harness(HullContact, dict(ROBOT, body_stiffness=K))
+    hc = Harness(HullContact, dict(body_stiffness=K), uses={"robot": mb.c.robot})
     hc.inputs.terrain = load_terrain(PLANE)
     return hc, o["link_poses"].copy(), o["link_velocities"].copy()
 
@@ -135,7 +136,7 @@ def test_screw_blades_rest_on_their_tips():
     raised 1 mm above it does not."""
     mb = Harness(Multibody, {"design": "eels-1.0", "modules": 1})
     o = mb.outputs()
-    hc = Harness(HullContact, {"design": "eels-1.0", "modules": 1, "screw_geometry": "blades", "blade_hulls": 8})
+    hc = Harness(HullContact, {"screw_geometry": "blades", "blade_hulls": 8}, uses={"robot": mb.c.robot})
     hc.inputs.terrain = load_terrain(PLANE)
     for dz, touching in ((0.09 - 0.001, True), (0.09 + 0.001, False)):
         poses = o["link_poses"].copy()
@@ -156,7 +157,7 @@ def test_spinning_screw_friction_uses_the_thread_direction():
     mb = Harness(Multibody, {"design": "eels-1.0-front", "modules": 1, "v0": {"screw_front_00": 10.0}})
     o = mb.outputs()
     terrain = load_terrain({"kind": "plane", "materials": [{"k": K, "c": C, "mu": 0.3, "ev_a": 3.0}]})
-    hc = Harness(HullContact, {"design": "eels-1.0-front", "modules": 1})
+    hc = Harness(HullContact, {}, uses={"robot": mb.c.robot})
     hc.inputs.terrain = terrain
     poses = o["link_poses"].copy()
     poses[:, 2] += 0.09 - 0.001
@@ -177,21 +178,22 @@ def test_spinning_screw_friction_uses_the_thread_direction():
 
 def test_blades_need_a_design_with_screws():
     with pytest.raises(ValueError, match="screw_geometry 'blades' needs a design with screws"):
-        HullContact("c", {"design": "mini-eels-1.0", "modules": 2, "screw_geometry": "blades"})
+        HullContact("c", {"screw_geometry": "blades"},
+                    uses={"robot": RobotModel.load(design="mini-eels-1.0", modules=2)})
 
 
 def test_unsupported_collision_geometry_is_named():
     with pytest.raises(MultibodyModelError, match="link 'block' <collision> #1: unsupported collision geometry <capsule>"):
-        HullContact("c", {"urdf": _urdf('<capsule radius="0.1" length="0.2"/>')})
+        HullContact("c", {}, uses={"robot": RobotModel.load(urdf=_urdf('<capsule radius="0.1" length="0.2"/>'))})
 
 
 def test_bad_cylinder_value_is_named():
     with pytest.raises(MultibodyModelError, match="link 'block'.*radius='-1'"):
-        HullContact("c", {"urdf": _urdf('<cylinder radius="-1" length="0.2"/>')})
+        HullContact("c", {}, uses={"robot": RobotModel.load(urdf=_urdf('<cylinder radius="-1" length="0.2"/>'))})
 
 
 def test_unconnected_terrain_is_explained():
-    hc = Harness(HullContact, {"urdf": _urdf('<box size="0.1 0.1 0.1"/>')})
+    hc = Harness(HullContact, {}, uses={"robot": RobotModel.load(urdf=_urdf('<box size="0.1 0.1 0.1"/>'))})
     hc.inputs.link_poses = [[0, 0, 0, 0, 0, 0, 1.0]]
     with pytest.raises(ValueError, match="input 'terrain' carries no Terrain"):
         hc.outputs()

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from snakesim.components.multibody.robot_model import RobotModel
+
 J_LINK = 0.5          # kg·m², link inertia about the hinge axis (z)
 J_BASE = 50.0         # kg·m², base inertia about z: the hinge reacts against a free base
 
@@ -18,6 +20,11 @@ def hinge_urdf(j_link: float = J_LINK, j_base: float = J_BASE, continuous: bool 
             f'<inertia ixx="0.3" iyy="0.4" izz="{j_link}" ixy="0" ixz="0" iyz="0"/></inertial></link>'
             f'<joint name="hinge" type="{kind}"><parent link="base"/><child link="arm"/>'
             f'<origin xyz="0 0 0"/><axis xyz="0 0 1"/>{limit}</joint></robot>')
+
+
+def hinge_robot(j_link: float = J_LINK, j_base: float = J_BASE, continuous: bool = False) -> RobotModel:
+    """The hinge as the RobotModel a multibody would provide (what a component alone is handed)."""
+    return RobotModel.load(urdf=hinge_urdf(j_link, j_base, continuous))
 
 
 def j_eff(j_link: float = J_LINK, j_base: float = J_BASE) -> float:

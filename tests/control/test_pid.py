@@ -12,11 +12,13 @@ import math
 import numpy as np
 import pytest
 
-from hinge_robot import hinge_urdf, j_eff
+from hinge_robot import hinge_robot, hinge_urdf, j_eff
 from snakesim.components.control import JointPid
+from snakesim.components.multibody.robot_model import RobotModel
 from snakesim.framework import Harness
 
 KP, ZETA, STEP = 50.0, 0.3, 0.1
+EELS_15 = RobotModel.load(design="eels-1.5")
 
 
 def pd_step(t, J, kp, kd, ref):
@@ -39,7 +41,7 @@ def scene(urdf_path, gains, rate=None, duration=2.0, step=STEP, extra=""):
         params: {{value: {step}, t_step: 0.0}}
       pid:
         type: joint_pid
-        params: {{urdf: "{urdf_path}", gains: {{hinge: {gains}}}{extra}}}{rate_line}
+        params: {{gains: {{hinge: {gains}}}{extra}}}{rate_line}
     connections:
       - ref.y -> pid.setpoint
       - robot.joint_q -> pid.q
@@ -115,9 +117,8 @@ def test_saturation_bounds_the_torque_and_clamping_bounds_the_overshoot(run_scen
 
 
 def test_discrete_filtered_derivative_is_the_backward_difference_at_tf_zero(tmp_path):
-    urdf = hinge_urdf()
-    h = Harness(JointPid, {"urdf": urdf, "gains": {"hinge": {"mode": "velocity", "kp": 0, "ki": 0, "kd": 2.0,
-                                                             "tf": 0.0}}}, rate=100.0)
+    h = Harness(JointPid, {"gains": {"hinge": {"mode": "velocity", "kp": 0, "ki": 0, "kd": 2.0, "tf": 0.0}}},
+                rate=100.0, uses={"robot": hinge_robot()})
     h.inputs.setpoint = [1.0]
     h.inputs.v = [0.2]
     assert h.outputs()["tau"][0] == 0.0                    # first tick: no derivative kick
@@ -127,16 +128,16 @@ def test_discrete_filtered_derivative_is_the_backward_difference_at_tf_zero(tmp_
 
 
 def test_continuous_joint_position_error_is_wrapped():
-    h = Harness(JointPid, {"urdf": hinge_urdf(continuous=True),
-                           "gains": {"hinge": {"mode": "position", "kp": 1.0, "kd": 0.0}}})
+    h = Harness(JointPid, {"gains": {"hinge": {"mode": "position", "kp": 1.0, "kd": 0.0}}},
+                uses={"robot": hinge_robot(continuous=True)})
     h.inputs.setpoint = [3.0]
     h.inputs.q = [-3.0]                                    # 6 rad apart, but only 2π − 6 the short way
     np.testing.assert_allclose(h.outputs()["error"], [6.0 - 2 * math.pi])
 
 
 def test_gains_resolve_per_kind_pattern_and_urdf_effort():
-    pid = JointPid("pid", {"design": "eels-1.5", "gains": {"bend_0[12]": {"kp": 7.0}},
-                           "kind_gains": {"screw": {"ki": 3.0}}})
+    pid = JointPid("pid", {"gains": {"bend_0[12]": {"kp": 7.0}}, "kind_gains": {"screw": {"ki": 3.0}}},
+                   uses={"robot": EELS_15})
     assert pid.gains_of("bend_01")["kp"] == 7.0 and pid.gains_of("bend_01")["mode"] == "position"
     assert pid.gains_of("bend_00")["kp"] == 200.0
     assert pid.gains_of("bend_00")["tau_max"] == 80.0                # URDF effort limit
@@ -151,5 +152,5 @@ def test_gains_resolve_per_kind_pattern_and_urdf_effort():
 ])
 def test_bad_gains_are_named(params, message):
     with pytest.raises(ValueError) as e:
-        JointPid("pid", {"design": "eels-1.5", **params})
+        JointPid("pid", params, uses={"robot": EELS_15})
     assert message in str(e.value).replace("needs", "need")

@@ -10,12 +10,12 @@ import pytest
 
 from snakesim.components.control import (CsvTrajectory, JointSetpoints, JointSpringDamper, Schedule,
                                          SerpenoidGait)
-from snakesim.components.control.robot_source import joint_names
+from snakesim.components.multibody.robot_model import RobotModel
 from snakesim.framework import Harness
 
-ROBOT = {"design": "eels-1.5"}
-NAMES = list(joint_names(type("P", (), {"urdf": None, "design": "eels-1.5", "modules": None, "head": None,
-                                        "robot": {}})))
+ROBOT = RobotModel.load(design="eels-1.5")
+NAMES = list(ROBOT.joints)
+USES = {"robot": ROBOT}
 
 
 def _csv(tmp_path, text, name="traj.csv"):
@@ -25,7 +25,7 @@ def _csv(tmp_path, text, name="traj.csv"):
 
 
 def _traj(tmp_path, text, **kw):
-    return Harness(CsvTrajectory, {**ROBOT, "file": _csv(tmp_path, text), **kw})
+    return Harness(CsvTrajectory, {"file": _csv(tmp_path, text), **kw}, uses=USES)
 
 
 TEXT = "time,screw_front_01,bend_02\n0.0,1.0,0.0\n1.0,3.0,-0.5\n3.0,-1.0,0.5\n"
@@ -80,27 +80,27 @@ def test_bad_csv_errors_name_the_file_line_and_what_is_valid(tmp_path, text, mes
 
 def test_missing_trajectory_file_is_named(tmp_path):
     with pytest.raises(ValueError, match="trajectory file 'nowhere.csv' not found"):
-        Harness(CsvTrajectory, {**ROBOT, "file": "nowhere.csv"})
+        Harness(CsvTrajectory, {"file": "nowhere.csv"}, uses=USES)
 
 
 def test_example_trajectory_in_configs_loads():
-    h = Harness(CsvTrajectory, {**ROBOT, "file": "configs/trajectories/eels-1.5-screw-sweep.csv"})
+    h = Harness(CsvTrajectory, {"file": "configs/trajectories/eels-1.5-screw-sweep.csv"}, uses=USES)
     assert h.outputs(1.5)["setpoint"][NAMES.index("screw_front_01")] == 0.0     # halfway from 2 to -2
 
 
 def test_constant_screw_speeds_with_directions_and_locked_joints():
-    h = Harness(JointSetpoints, {**ROBOT, "screw_speed": 2.0, "screw_direction": {"screw_front_0[13]": -1.0},
-                                 "hold": {"bend_02": 0.3}})
+    h = Harness(JointSetpoints, {"screw_speed": 2.0, "screw_direction": {"screw_front_0[13]": -1.0},
+                                 "hold": {"bend_02": 0.3}}, uses=USES)
     y = dict(zip(NAMES, h.outputs()["setpoint"]))
     assert [y[f"screw_front_0{i}"] for i in range(4)] == [2.0, -2.0, 2.0, -2.0]
     assert y["bend_02"] == 0.3 and y["bend_00"] == 0.0 and y["twist_01"] == 0.0
     with pytest.raises(ValueError, match="matches no name"):
-        JointSetpoints("g", {**ROBOT, "hold": {"bend_9*": 0.1}})
+        JointSetpoints("g", {"hold": {"bend_9*": 0.1}}, uses=USES)
 
 
 def test_serpenoid_wave_travels_along_the_body():
     p = {"amplitude": 0.4, "frequency": 0.5, "wavelength": 4.0}
-    h = Harness(SerpenoidGait, {**ROBOT, **p})
+    h = Harness(SerpenoidGait, p, uses=USES)
     bends = [NAMES.index(f"bend_0{i}") for i in range(4)]
     w = 2 * math.pi * 0.5
     for t in (0.0, 0.3, 1.1):
@@ -111,7 +111,7 @@ def test_serpenoid_wave_travels_along_the_body():
                                    atol=1e-14)
     # joint i at time t equals joint 0 a quarter period (one joint of a 4-joint wavelength) earlier
     assert h.outputs(1.0)["setpoint"][bends[1]] == pytest.approx(h.outputs(0.5)["setpoint"][bends[0]], abs=1e-15)
-    side = Harness(SerpenoidGait, {**ROBOT, **p, "kind": "sidewinding", "second_amplitude": 0.2})
+    side = Harness(SerpenoidGait, {**p, "kind": "sidewinding", "second_amplitude": 0.2}, uses=USES)
     tw = NAMES.index("twist_00")
     assert side.outputs(0.0)["setpoint"][tw] == pytest.approx(0.2)       # sin(π/2)
 
@@ -126,8 +126,8 @@ def test_schedule_switches_at_the_given_times():
 
 
 def test_spring_damper_torque():
-    h = Harness(JointSpringDamper, {**ROBOT, "stiffness": {"bend_*": 10.0, "screw_front_00": 1.0},
-                                    "damping": {"*": 0.5}, "rest": {"bend_01": 0.2}})
+    h = Harness(JointSpringDamper, {"stiffness": {"bend_*": 10.0, "screw_front_00": 1.0},
+                                    "damping": {"*": 0.5}, "rest": {"bend_01": 0.2}}, uses=USES)
     q = np.zeros(len(NAMES))
     q[NAMES.index("bend_01")] = 0.5
     q[NAMES.index("screw_front_00")] = 3.0                   # continuous: rest 0, wrapped difference

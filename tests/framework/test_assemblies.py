@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from snakesim.framework.errors import BuildError, ConfigError
-from snakesim.framework.plan import MAX_PHASES
+from snakesim.framework.rates import MAX_PHASES
 from snakesim.framework.session import load_session
 
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 from pydantic import ValidationError
@@ -23,21 +25,21 @@ class ShapeParams(Params):
 
 
 def test_resolve_shape_from_params():
-    p = ShapeParams()
-    assert resolve_shape("n", p, "c.u") == (4,)
-    assert resolve_shape(("n", 3), p, "c.u") == (4, 3)
-    assert resolve_shape(("m", "n"), p, "c.u") == (3, 4)
-    assert resolve_shape(lambda q: (q.n * 2,), p, "c.u") == (8,)
-    assert resolve_shape(5, p, "c.u") == (5,)
-    assert resolve_shape((), p, "c.u") == ()
-    assert resolve_shape(None, p, "c.u") is None
+    c = SimpleNamespace(p=ShapeParams(n=4, m=3))          # shapes see the component: its params as c.p
+    assert resolve_shape("n", c, "c.u") == (4,)
+    assert resolve_shape(("n", 3), c, "c.u") == (4, 3)
+    assert resolve_shape(("m", "n"), c, "c.u") == (3, 4)
+    assert resolve_shape(lambda comp: (comp.p.n * 2,), c, "c.u") == (8,)
+    assert resolve_shape(5, c, "c.u") == (5,)
+    assert resolve_shape((), c, "c.u") == ()
+    assert resolve_shape(None, c, "c.u") is None
 
 
 def test_resolve_shape_errors_name_the_port():
     with pytest.raises(AttributeError, match=r"c\.u: shape names parameter 'k'"):
-        resolve_shape(("k",), ShapeParams(), "c.u")
+        resolve_shape(("k",), SimpleNamespace(p=ShapeParams()), "c.u")
     with pytest.raises(ValueError, match=r"c\.u: shape dimension -1 is negative"):
-        resolve_shape((-1,), ShapeParams(), "c.u")
+        resolve_shape((-1,), SimpleNamespace(p=ShapeParams()), "c.u")
 
 
 @pytest.mark.parametrize("a, b", [("N·m", "N*m"), ("N * m", "N*m"), ("m/s^2", "m/s**2"), ("", "1")])

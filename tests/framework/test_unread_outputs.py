@@ -8,13 +8,14 @@ component itself decides what to skip there.
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
 from snakesim.framework import Component, Input, Output, Params
 from snakesim.framework.registry import build_registry
 from snakesim.framework.session import load_session
-from snakesim.framework.simulator import Simulator
 from snakesim.framework.wiring import PortRef
 
 
@@ -98,13 +99,18 @@ def test_read_calc_group_is_evaluated(write, reg, how):
         np.testing.assert_allclose(r["probe.costly"], 2.0 * r["t"], rtol=0, atol=1e-15)
 
 
-def test_a_later_simulator_recording_an_unread_port_revives_it(write, reg):
+def test_recording_is_decided_at_build_and_the_plan_is_frozen(write, reg):
+    """A record is part of the build: the same scene built with the port recorded evaluates it,
+    and nothing can change a built plan afterwards (no later 'require')."""
     s = _session(write, reg, "connections: [probe.y -> sink.u]\n")
-    probe = s.plan.components["probe"]
-    assert probe.calls["costly"] == 0
-    Simulator(s.plan, s.integrator, record=[PortRef("probe", "costly")]).run(0.03)
+    assert s.plan.components["probe"].calls["costly"] == 0
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        s.plan.major = ()
+    r = _session(write, reg, "connections: [probe.y -> sink.u]\nrecord: [probe.costly]\n")
+    probe = r.plan.components["probe"]
+    r.run()
     assert probe.bound == frozenset({"y", "costly"})
-    assert probe.calls["costly"] == 4
+    assert probe.calls["costly"] == 6
 
 
 def test_a_component_outside_a_build_reads_every_output():

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from snakesim.components.monitors import MobilityMonitor
+from snakesim.components.multibody.robot_model import RobotModel
 from snakesim.framework import Harness
 from snakesim.framework.registry import build_registry
 from snakesim.framework.session import load_session
@@ -22,7 +23,7 @@ def _pitch(alpha):
 
 
 def _monitor(rate=10.0, **params):
-    h = Harness(MobilityMonitor, {"design": "eels-1.5", **params}, rate=rate)
+    h = Harness(MobilityMonitor, params, rate=rate, uses={"robot": RobotModel.load(design="eels-1.5")})
     nl = h.infos["link_poses"].shape[0]
     return h, nl
 
@@ -83,7 +84,7 @@ def test_run_stops_on_a_mobility_failure(tmp_path):
         components:
           robot: {{type: multibody, params: {{urdf: "{u}", gravity: [0, 0, 0], base_quaternion: {q},
                                                base_velocity: [0, 0, 0, 0, 2.0, 0]}}}}
-          mon: {{type: mobility_monitor, params: {{urdf: "{u}", tilt_links: [bob]}}, rate: 100}}
+          mon: {{type: mobility_monitor, params: {{tilt_links: [bob]}}, rate: 100}}
         connections:
           - robot.link_rotations -> mon.link_rotations
           - robot.link_poses -> mon.link_poses

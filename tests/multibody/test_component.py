@@ -60,14 +60,14 @@ def test_port_names_and_orders():
     urdf = snake_urdf(modules=2, screws="pair", twist=True)
     h = make_harness(urdf)
     c = h.c
-    assert c.link_names[:4] == ["tail", "knuckle_00", "module_00", "screw_front_link_00"]   # URDF <link> order
-    assert c.joint_names == ["bend_00", "twist_00", "screw_front_00", "bend_01", "twist_01", "screw_front_01"]
-    names = Multibody.outputs["joint_q"].signal.names(c.p)
-    assert names == tuple(c.joint_names)
-    assert Multibody.outputs["link_poses"].signal.names(c.p)[:7] == ("tail.x", "tail.y", "tail.z", "tail.qx",
+    assert c.robot.links[:4] == ("tail", "knuckle_00", "module_00", "screw_front_link_00")   # URDF <link> order
+    assert c.robot.joints == ("bend_00", "twist_00", "screw_front_00", "bend_01", "twist_01", "screw_front_01")
+    names = Multibody.outputs["joint_q"].signal.element_names(c)
+    assert names == tuple(c.robot.joints)
+    assert Multibody.outputs["link_poses"].signal.element_names(c)[:7] == ("tail.x", "tail.y", "tail.z", "tail.qx",
                                                                     "tail.qy", "tail.qz", "tail.qw")
     out = h.outputs()
-    assert out["q"].shape == (c.dyn.model.nq,) and out["link_velocities"].shape == (len(c.link_names), 6)
+    assert out["q"].shape == (c.dyn.model.nq,) and out["link_velocities"].shape == (len(c.robot.links), 6)
 
 
 GRAVITY_SWITCH = """
@@ -86,7 +86,7 @@ def test_gravity_switches_off_during_a_run(run_scene, tmp_path):
     path = tmp_path / "s.urdf"
     path.write_text(urdf)
     session, res = run_scene(GRAVITY_SWITCH.format(urdf=path))
-    mass = sum(ln.mass for ln in session.plan.components["robot"]._layout.tree.links)
+    mass = sum(ln.mass for ln in session.plan.components["robot"].robot.tree.links)
     t, pz = res["t"], res["robot.momentum"][:, 2]
     on, off = t <= 0.2 - 1e-9, t >= 0.2 + 1e-3
     np.testing.assert_allclose(pz[on], -3.0 * mass * t[on], rtol=1e-9, atol=1e-9)
@@ -148,7 +148,7 @@ def test_armature_and_damping_by_name_pattern_and_kind():
     urdf = snake_urdf(modules=2, screws="front", twist=True)
     h = make_harness(urdf, armature={"bend_01": 0.5, "twist_*": 0.2}, damping={"screw_*": 0.05})
     c = h.c
-    from snakesim.components.multibody.layout import ARMATURE_PER_EFFORT as per
+    from snakesim.components.multibody.joint_values import ARMATURE_PER_EFFORT as per
     assert c.armature_user["bend_01"] == 0.5 and c.armature_user["twist_00"] == 0.2
     assert c.armature_user["bend_00"] == pytest.approx(per["bend"] * 100.0)       # URDF effort 100 N·m
     assert c.armature_user["screw_front_00"] == pytest.approx(per["screw"] * 30.0)
@@ -161,7 +161,6 @@ def test_armature_and_damping_by_name_pattern_and_kind():
     ({"urdf": snake_urdf(1).replace('type="continuous"', 'type="prismatic"', 1)}, "prismatic"),
     ({"urdf": snake_urdf(1), "q0": {"bend_07": 0.1}}, "bend_07"),
     ({"urdf": snake_urdf(1), "q0": [0.1]}, "needs 2 values"),
-    ({"urdf": snake_urdf(1), "fts_cuts": ["nope"]}, "matches no joint"),
     ({"urdf": snake_urdf(1), "base_quaternion": (0, 0, 0, 0)}, "no direction"),
     ({"urdf": snake_urdf(1), "armature": {"bend_00": 0.0, "screw_*": 0.0}, "armature_floor": 0.0}, None),
     ({"urdf": "<robot><link name='a'/><link name='b'/><joint name='j' type='revolute'><parent link='a'/>"
@@ -177,6 +176,12 @@ def test_bad_parameters_name_the_problem(params, match):
         make_harness(**params)
 
 
+def test_a_cut_that_matches_nothing_lists_the_joints():
+    robot = make_harness(snake_urdf(1)).c.robot
+    with pytest.raises(MultibodyModelError, match="'nope' matches no joint or link.*joints: .*bend_00"):
+        robot.cuts(["nope"])
+
+
 def test_bad_parameters_surface_as_config_errors_in_a_scene(run_scene):
     with pytest.raises(ConfigError, match="components.robot"):
         run_scene("""
@@ -189,7 +194,7 @@ def test_bad_parameters_surface_as_config_errors_in_a_scene(run_scene):
 
 @pytest.mark.parametrize("design", sorted(DESIGNS))
 def test_every_design_builds_and_runs(design):
-    h = make_harness(design=design, modules=2, fts_cuts=["fts_joint_*"] if design == "eels-1.5" else [])
+    h = make_harness(design=design, modules=2)
     c = h.c
     desc = load_robot(design, modules=2)
     has_pairs = "<mimic" in desc.urdf
@@ -197,7 +202,7 @@ def test_every_design_builds_and_runs(design):
     model = c.dyn.model
     rng = np.random.default_rng(0)
     q, v = random_state(model, rng)
-    set_state(h, q, v, tau=rng.standard_normal(len(c.joint_names)))
+    set_state(h, q, v, tau=rng.standard_normal(len(c.robot.joints)))
     dx = h.derivative()
     assert np.all(np.isfinite(dx))
     rep = c.optimisation_report(timing=False)
@@ -206,7 +211,7 @@ def test_every_design_builds_and_runs(design):
     assert rep["after"]["bodies"] + rep["after"]["links_as_frames"] == rep["before"]["links"]
     assert "before" in str(rep)
     if design == "eels-1.5":
-        assert c.cut_names == [f"fts_joint_{i:02d}" for i in range(1, 2)]
+        assert c.robot.cuts(["fts_joint_*"])[0] == [f"fts_joint_{i:02d}" for i in range(1, 2)]
 
 
 @pytest.mark.parametrize("urdf", [snake_urdf(modules=2, screws="pair", twist=True, head_mass=1.0),
@@ -217,7 +222,7 @@ def test_report_unoptimised_crba_baseline_has_the_same_dynamics(urdf):
     from snakesim.components.multibody.report import baseline_models
 
     h = make_harness(urdf, screw_pairs="mimic_crba")
-    base = baseline_models(h.c._layout.tree, h.c.armature_user)["crba"]
+    base = baseline_models(h.c.robot.tree, h.c.armature_user)["crba"]
     opt = h.c.dyn
     assert base.model.njoints > opt.model.njoints and base.model.nv == opt.model.nv
     rng = np.random.default_rng(1)

@@ -1,7 +1,7 @@
 """Inter-body wrenches across joints and fixed frames (force-torque sensors, paper 2.2.4).
 
-cut_wrenches[k] is the wrench the parent side exerts on everything below
-cut k, in the cut's child-link frame about its origin. Checks from statics
+joint_wrenches[l] is the wrench the parent side exerts on everything below
+link l (across its parent joint), in link l's frame about its origin. Checks from statics
 and from the equations of motion, with references that do not use the
 component's kernels (Pinocchio's own URDF model and subtree centres of mass).
 """
@@ -24,13 +24,13 @@ def _urdf():
 def test_free_fall_carries_no_internal_wrench():
     """Uniform gravity accelerates every link alike: at rest and unactuated, no joint transmits anything."""
     urdf = _urdf()
-    h = make_harness(urdf, fts_cuts=["*"], gravity=(1.0, -2.0, -9.81))
+    h = make_harness(urdf, gravity=(1.0, -2.0, -9.81))
     model, _ = reference_model(urdf)
     qmap, _ = coordinate_maps(h, model)
     q, _ = random_state(model, np.random.default_rng(4))
     set_state(h, q[qmap], np.zeros(model.nv))
-    w = h.outputs()["cut_wrenches"]
-    assert len(h.c.cut_names) == len(h.c.link_names) - 1
+    w = h.outputs()["joint_wrenches"]
+    assert len(h.c.robot.cuts(["*"])[0]) == len(h.c.robot.links) - 1
     weight = HEAD_MASS * 9.81
     assert np.abs(w).max() < 1e-11 * weight
 
@@ -42,23 +42,24 @@ def test_held_chain_carries_the_weight_below_each_cut(mode):
     urdf = _urdf()
     g = np.array([0.8, -0.5, -9.7])
     cuts = ["bend_01", "twist_02", "head_joint", "sensor_joint_01"]
-    h = make_harness(urdf, fts_cuts=cuts, screw_pairs=mode, gravity=tuple(g))
+    h = make_harness(urdf, screw_pairs=mode, gravity=tuple(g))
     model, data = reference_model(urdf)
     model.gravity.linear[:] = g
     qmap, vmap = coordinate_maps(h, model)
     q, _ = random_state(model, np.random.default_rng(8))
     gen = pin.rnea(model, data, q, np.zeros(model.nv), np.zeros(model.nv))   # generalised gravity
     rot = pin.XYZQUATToSE3(q[:7]).rotation
-    W = np.zeros((len(h.c.link_names), 6))
+    W = np.zeros((len(h.c.robot.links), 6))
     W[h.c.link_index("tail")] = np.r_[rot @ gen[:3], rot @ gen[3:6]]      # root rows are tail-frame
-    tau = np.array([gen[model.joints[model.getJointId(j)].idx_v] for j in h.c.joint_names])
+    tau = np.array([gen[model.joints[model.getJointId(j)].idx_v] for j in h.c.robot.joints])
     set_state(h, q[qmap], np.zeros(model.nv), tau=tau, wrenches=W)
     out = h.outputs()
     assert np.abs(out["a"]).max() < 1e-9
 
     pin.centerOfMass(model, data, q)                    # subtree masses, centres of mass (joint frames)
     pin.framesForwardKinematics(model, data, q)
-    for k, cut in enumerate(h.c.cut_names):
+    names, children = h.c.robot.cuts(cuts)
+    for cut, link in zip(names, children):
         child = {"bend_01": "knuckle_01", "twist_02": "module_02", "head_joint": "head",
                  "sensor_joint_01": "sensor_01"}[cut]
         frame = data.oMf[model.getFrameId(child, pin.FrameType.BODY)]
@@ -72,7 +73,8 @@ def test_held_chain_carries_the_weight_below_each_cut(mode):
         f_world = -mass * g
         tau_world = np.cross(com - frame.translation, f_world)
         expect = np.r_[frame.rotation.T @ f_world, frame.rotation.T @ tau_world]
-        np.testing.assert_allclose(out["cut_wrenches"][k], expect, atol=1e-9 * (1 + mass * 9.81))
+        assert link == child
+        np.testing.assert_allclose(out["joint_wrenches"][h.c.link_index(child)], expect, atol=1e-9 * (1 + mass * 9.81))
 
 
 @pytest.mark.parametrize("mode", ["embedded", "mimic_crba"])
@@ -81,17 +83,17 @@ def test_torque_about_a_joint_axis_is_the_motor_torque_less_rotor_and_friction(m
     τ - armature·q̈ - damping·q̇ (the rest of the motor torque spins the rotor or is lost)."""
     urdf = _urdf()
     joints = ["bend_00", "twist_00", "bend_02", "twist_02"]
-    h = make_harness(urdf, fts_cuts=joints, screw_pairs=mode, damping={"bend_*": 0.7, "twist_*": 0.3},
+    h = make_harness(urdf, screw_pairs=mode, damping={"bend_*": 0.7, "twist_*": 0.3},
                      gravity=(0.0, 0.0, -9.81))
     rng = np.random.default_rng(9)
     model = h.c.dyn.model
     q, v = random_state(model, rng)
-    set_state(h, q, 2.0 * v, tau=5.0 * rng.standard_normal(len(h.c.joint_names)),
-              wrenches=10.0 * rng.standard_normal((len(h.c.link_names), 6)))
+    set_state(h, q, 2.0 * v, tau=5.0 * rng.standard_normal(len(h.c.robot.joints)),
+              wrenches=10.0 * rng.standard_normal((len(h.c.robot.links), 6)))
     out = h.outputs()
-    for k, j in enumerate(h.c.cut_names):
+    for j, link in zip(*h.c.robot.cuts(joints)):
         i = h.c.dof_index(j)
         vi = model.joints[model.getJointId(j)].idx_v
         expect = h.u.tau[i] - h.c.armature_user[j] * out["a"][vi] - h.c.damping_user[j] * out["joint_v"][i]
         axis = 1 if j.startswith("bend") else 0                 # bend about y, twist about x (link frame)
-        assert abs(out["cut_wrenches"][k, 3 + axis] - expect) < 1e-9 * (1 + abs(expect)), (j, expect)
+        assert abs(out["joint_wrenches"][h.c.link_index(link), 3 + axis] - expect) < 1e-9 * (1 + abs(expect)), (j, expect)

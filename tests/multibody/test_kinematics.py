@@ -32,13 +32,13 @@ def test_link_kinematics_match_pinocchio(case):
     rng = np.random.default_rng(7)
     for _ in range(3):
         q, v = random_state(model, rng)
-        set_state(h, q[qmap], v[vmap], tau=rng.standard_normal(len(h.c.joint_names)), gravity=[0.0, 0.0, -9.81])
+        set_state(h, q[qmap], v[vmap], tau=rng.standard_normal(len(h.c.robot.joints)), gravity=[0.0, 0.0, -9.81])
         out = h.outputs()
         a = np.empty(model.nv)
         a[vmap] = out["a"]
         pin.forwardKinematics(model, data, q, v, a)
         pin.updateFramePlacements(model, data)
-        for row, name in enumerate(h.c.link_names):
+        for row, name in enumerate(h.c.robot.links):
             fid = model.getFrameId(name, pin.FrameType.BODY)
             m = data.oMf[fid]
             np.testing.assert_allclose(out["link_poses"][row, :3], m.translation, atol=1e-12)
@@ -68,7 +68,7 @@ def test_external_wrench_is_world_axes_about_link_origin(case):
     model.armature[vmap] = h.c.dyn.model.armature
     rng = np.random.default_rng(11)
     q, v = random_state(model, rng)
-    W = rng.standard_normal((len(h.c.link_names), 6))
+    W = rng.standard_normal((len(h.c.robot.links), 6))
     set_state(h, q[qmap], v[vmap], wrenches=np.zeros_like(W))
     a0, a1 = np.empty(model.nv), np.empty(model.nv)
     a0[vmap] = h.derivative()[model.nv:]
@@ -77,7 +77,7 @@ def test_external_wrench_is_world_axes_about_link_origin(case):
     pin.computeJointJacobians(model, data, q)
     pin.updateFramePlacements(model, data)
     gen = np.zeros(model.nv)
-    for row, name in enumerate(h.c.link_names):
+    for row, name in enumerate(h.c.robot.links):
         J = pin.getFrameJacobian(model, data, model.getFrameId(name, pin.FrameType.BODY), pin.LOCAL_WORLD_ALIGNED)
         gen += J.T @ W[row]
     M = pin.crba(model, data, q)

@@ -52,7 +52,7 @@ def test_embedded_and_mimic_paths_give_the_same_accelerations(case):
     emb = make_harness(urdf, screw_pairs="auto", gravity_input="vector")
     ref = make_harness(urdf, screw_pairs="mimic_crba", gravity_input="vector")
     assert emb.c.mode == "embedded" and ref.c.mode == "mimic_crba"
-    assert emb.c._layout.q_names == ref.c._layout.q_names
+    assert emb.c.robot.q_names == ref.c.robot.q_names
     model = ref.c.dyn.model
     pin_model, pin_data = reference_model(urdf)
     qmap, vmap = coordinate_maps(ref, pin_model)
@@ -61,8 +61,8 @@ def test_embedded_and_mimic_paths_give_the_same_accelerations(case):
     for _ in range(4):
         q, v = random_state(model, rng, spread=3.0)
         v *= 3.0
-        tau = 5.0 * rng.standard_normal(len(ref.c.joint_names))
-        W = 20.0 * rng.standard_normal((len(ref.c.link_names), 6))   # every link, screws included
+        tau = 5.0 * rng.standard_normal(len(ref.c.robot.joints))
+        W = 20.0 * rng.standard_normal((len(ref.c.robot.links), 6))   # every link, screws included
         g = rng.standard_normal(3) * 5.0
         for h in (emb, ref):
             set_state(h, q, v, tau=tau, wrenches=W, gravity=g)
@@ -73,7 +73,7 @@ def test_embedded_and_mimic_paths_give_the_same_accelerations(case):
         tau_v[ref.c._dof_v] = tau
         qp, vp, tp = np.empty(pin_model.nq), np.empty(pin_model.nv), np.empty(pin_model.nv)
         qp[qmap], vp[vmap], tp[vmap] = q, v, tau_v
-        a_pin = pinocchio_reference(pin_model, pin_data, qp, vp, tp, W, ref.c.link_names, g)
+        a_pin = pinocchio_reference(pin_model, pin_data, qp, vp, tp, W, ref.c.robot.links, g)
         assert np.abs(a_ref - a_pin[vmap]).max() < 1e-10 * scale
 
 

@@ -1,11 +1,10 @@
 """Shape fit: the fitted robot's bend points lie on the target curve (checked through the multibody's own FK)."""
 
-from types import SimpleNamespace
-
 import numpy as np
 import pytest
 
 from snakesim.components.multibody import Multibody
+from snakesim.components.multibody.robot_model import RobotModel
 from snakesim.components.placement import PlacementError, Shape, fit_shape
 from snakesim.components.placement.fit import curve_distance
 from snakesim.components.placement.shapes import world_curve
@@ -13,15 +12,15 @@ from snakesim.framework.harness import Harness
 
 
 def src(design, modules=4):
-    return SimpleNamespace(design=design, modules=modules, head=None, urdf=None, robot={})
+    return RobotModel.load(design=design, modules=modules)
 
 
 def bend_points(design, pl, modules=4):
     h = Harness(Multibody, dict(design=design, modules=modules, q0=pl.q0, base_position=pl.base_position,
                                 base_quaternion=pl.base_quaternion))
     poses = h.outputs()["link_poses"]
-    tree = h.c._layout.tree
-    rows = [h.c.link_names.index(tree.joint_by_name[j].child) for j in h.c.joint_names if j.startswith("bend")]
+    robot = h.c.robot
+    rows = [robot.link_index(robot.tree.joint_by_name[j].child) for j in robot.joints if j.startswith("bend")]
     return poses[rows, :3]
 
 
@@ -100,4 +99,4 @@ def test_placed_multibody_takes_the_fit():
     h = Harness(PlacedMultibody, dict(design="eels-1.5", modules=4, shape=SHAPES[1]))
     pl = fit_shape(src("eels-1.5"), SHAPES[1])
     assert h.c.p.q0 == pl.q0 and h.c.p.base_quaternion == pytest.approx(pl.base_quaternion)
-    assert h.outputs()["joint_q"][h.c.joint_names.index("bend_01")] == pytest.approx(pl.q0["bend_01"])
+    assert h.outputs()["joint_q"][h.c.dof_index("bend_01")] == pytest.approx(pl.q0["bend_01"])

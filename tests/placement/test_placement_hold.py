@@ -15,6 +15,7 @@ creep ≤ 0.894 v_ε = 0.18 mm/s, 1.8 mm in 10 s, under the 5 mm asked. Slip run
 import numpy as np
 import pytest
 
+from snakesim.components.placement import SettlePhase
 from snakesim.components.placement.handoff import held_state, hold_overrides
 from snakesim.framework.session import load_session
 
@@ -32,15 +33,15 @@ def placed():
 def hold(state, mu, duration):
     s = load_session("placement-walls-hold", overrides=hold_overrides(state) + [f"friction={mu}", f"v_eps={V_EPS}"],
                      sim_overrides={"duration": duration})
-    mass = sum(l.mass for l in s.plan.components[H + "robot"]._layout.tree.links)
+    mass = sum(l.mass for l in s.plan.components[H + "robot"].robot.tree.links)
     return s.run(), mass * 9.81, mass
 
 
 def test_placement_preloads_every_screw_with_a_self_equilibrated_wall_force(placed):
     s, r, _ = placed
     F_pre = s.plan.components[P + "settle"].preload_forces
-    i = np.flatnonzero(r[P + "settle.phase"][:, 0] < 2.0)[-1]       # the end of loading: gravity still off
-    assert r[P + "settle.phase"][i, 0] == 1.0
+    i = np.flatnonzero(r[P + "settle.phase"][:, 0] < SettlePhase.HOLDING)[-1]   # the end of loading: gravity off
+    assert r[P + "settle.phase"][i, 0] == SettlePhase.LOADING
     F = r[P + "contact.screw_normal_force"][i]
     # two screws per wall: Σ F n = 0 means equal wall totals; after load_time the walls carry the pre-load
     assert F[[0, 3]].sum() == pytest.approx(F[[1, 2]].sum(), rel=0.02)

@@ -4,12 +4,14 @@ import numpy as np
 import pytest
 
 from snakesim.components.multibody import Multibody
-from snakesim.components.placement import Settle
+from snakesim.components.multibody.robot_model import RobotModel
+from snakesim.components.placement import Settle, SettlePhase
 from snakesim.components.terrain.spec import load_terrain
 from snakesim.framework.harness import Harness
 from snakesim.framework.session import load_session
 
 ROBOT = dict(design="eels-1.5", modules=4)
+USES = {"robot": RobotModel.load(**ROBOT)}
 
 
 def straight_poses(z):
@@ -18,7 +20,7 @@ def straight_poses(z):
 
 
 def settle(**params):
-    h = Harness(Settle, dict(ROBOT, **params), rate=1000.0)
+    h = Harness(Settle, params, rate=1000.0, uses=USES)
     h.inputs.terrain = load_terrain("flat-ice")
     return h
 
@@ -35,7 +37,8 @@ def test_attraction_is_k_times_distance_along_minus_normal_and_drag_opposes_moti
     W = y["wrenches"]
     np.testing.assert_allclose(W[:, 2].sum(), -4 * k * (z - 0.07), rtol=1e-12)
     np.testing.assert_allclose(W[:, :2], 0.0, atol=1e-9)
-    assert y["gravity"][0] == 0.0 and y["phase"][0] == 0.0 and np.isnan(y["settle_time"][0])
+    assert y["gravity"][0] == 0.0 and y["phase"][0] == SettlePhase.SETTLING
+    assert np.isnan(y["settle_time"][0])
     # a link moving at v feels −ζ m v
     v = o["link_velocities"].copy()
     v[:, 0] = 0.1
@@ -56,7 +59,7 @@ def test_not_settled_by_time_limit_stops_the_run_with_the_reason():
 
 def test_rate_is_required():
     with pytest.raises(ValueError, match="give it a rate"):
-        Settle("s", ROBOT)
+        Settle("s", {}, uses=USES)
 
 
 def test_latch_after_quiet_time_sets_gravity_setpoints_and_preload():
@@ -68,7 +71,8 @@ def test_latch_after_quiet_time_sets_gravity_setpoints_and_preload():
         h.update(i * 1e-3)
     y = h.outputs(0.012)
     # load_time 0: straight to holding (phase 2), gravity on at the latch
-    assert y["phase"][0] == 2.0 and y["gravity"][0] == 1.0 and y["settle_time"][0] == pytest.approx(0.01)
+    assert y["phase"][0] == SettlePhase.HOLDING and y["gravity"][0] == 1.0
+    assert y["settle_time"][0] == pytest.approx(0.01)
     assert y["hold_time"][0] == pytest.approx(0.01)
     assert np.all(y["wrenches"] == 0.0)
     # on one plane the pressing forces cannot balance (all push down): the self-equilibrated preload is ~0
@@ -84,13 +88,15 @@ def test_loading_phase_keeps_gravity_off_and_joints_free_then_latches_the_loaded
     q = o["joint_q"] + 0.01                                    # the shape moves while loading
     h.inputs.joint_q = q
     y = h.outputs(0.012)
-    assert y["phase"][0] == 1.0 and y["gravity"][0] == 0.0 and np.isnan(y["hold_time"][0])
+    assert y["phase"][0] == SettlePhase.LOADING and y["gravity"][0] == 0.0
+    assert np.isnan(y["hold_time"][0])
     np.testing.assert_array_equal(y["setpoint"][~h.c._screw | (h.c.p.screw_hold == "angle")], q[~h.c._screw])
     for i in range(12, 16):
         h.update(i * 1e-3)
     h.inputs.joint_q = q + 0.02                                # after the latch the set-points stay
     y = h.outputs(0.016)
-    assert y["phase"][0] == 2.0 and y["gravity"][0] == 1.0 and y["hold_time"][0] == pytest.approx(0.015)
+    assert y["phase"][0] == SettlePhase.HOLDING and y["gravity"][0] == 1.0
+    assert y["hold_time"][0] == pytest.approx(0.015)
     np.testing.assert_allclose(y["setpoint"][~h.c._screw], q[~h.c._screw])
 
 
@@ -101,7 +107,7 @@ P = "placement-scene/"
 def test_eels15_settles_with_every_screw_within_1mm(scene, duration):
     r = load_session(scene, sim_overrides={"duration": duration}).run()
     T, ph = r["t"], r[P + "settle.phase"][:, 0]
-    latched = np.flatnonzero(ph > 0.5)
+    latched = np.flatnonzero(ph != SettlePhase.SETTLING)
     assert latched.size, f"{scene} did not settle in {duration} s"
     i = latched[0] - 1                                       # the last settling sample
     gap = r[P + "settle.gap"][i]
@@ -116,7 +122,7 @@ def test_eels15_settles_with_every_screw_within_1mm(scene, duration):
 def test_settles_in_u_channel_and_on_dem(scene, duration, need):
     # DEM: EELS 1.0's two screws per module are one rigid body, so the scene asks 6 of 8 in the band
     r = load_session(scene, sim_overrides={"duration": duration}).run()
-    latched = np.flatnonzero(r[P + "settle.phase"][:, 0] > 0.5)
+    latched = np.flatnonzero(r[P + "settle.phase"][:, 0] != SettlePhase.SETTLING)
     assert latched.size, f"{scene} did not settle in {duration} s"
     gap = r[P + "settle.gap"][latched[0] - 1]
     assert np.sum((gap <= 1e-3) & (gap >= -1e-3)) >= need, gap

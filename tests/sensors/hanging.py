@@ -1,7 +1,9 @@
 """EELS 1.5 in static equilibrium, hanging from a tether at its front or standing on its tail.
 
 Masses and centres of mass come from the URDF text (xml), not from the
-multibody: the expected sensor readings are computed independently.
+multibody: the expected sensor readings are computed independently. The
+sensors and the tether are handed the multibody's RobotModel, as an assembly
+binds them.
 """
 
 from __future__ import annotations
@@ -66,11 +68,11 @@ def equilibrium(support: str):
 
     Returns dict: robot/fts/imu harnesses evaluated in equilibrium, tether harness (or None), masses.
     """
-    robot = Harness(Multibody, {**ROBOT, "fts_cuts": ["fts_joint_*"]}, name="robot")
-    text = robot.c._layout.text
-    mass, com, parent = urdf_masses(text)
+    robot = Harness(Multibody, {**ROBOT}, name="robot")
+    model = robot.c.robot
+    mass, com, parent = urdf_masses(model.urdf)
     M = sum(mass.values())
-    links = robot.c.link_names
+    links = list(model.links)
     x0 = robot.x.copy()
     out = robot.outputs()
     P, Rl = out["link_poses"][:, :3], out["link_rotations"]            # identity base at the origin
@@ -85,9 +87,10 @@ def equilibrium(support: str):
     tether = None
     out = robot.outputs()
     if support == "tether":
-        tether = Harness(Tethers, {**ROBOT, "tethers": [{"link": TIE_LINK, "offset": TIE_OFFSET, "stiffness": K,
-                                                          "damping": 50.0, "rest_length": REST,
-                                                          "anchor": (0.0, 0.0, REST + M * 9.81 / K)}]})
+        tether = Harness(Tethers, {"tethers": [{"link": TIE_LINK, "offset": TIE_OFFSET, "stiffness": K,
+                                                "damping": 50.0, "rest_length": REST,
+                                                "anchor": (0.0, 0.0, REST + M * 9.81 / K)}]},
+                         uses={"robot": model})
         for k in ("link_rotations", "link_poses", "link_velocities"):
             tether.set_input(k, out[k])
         W = tether.outputs()["wrenches"]
@@ -99,7 +102,7 @@ def equilibrium(support: str):
         W[0, 3:] = np.cross(cw - o, -M * G)
     robot.inputs.wrenches = W
     # joint torques that hold the shape: a is affine in tau, solve a_joints = 0
-    nj = len(robot.c.joint_names)
+    nj = model.nj
     robot.inputs.tau = np.zeros(nj)
     a0 = robot.outputs()["a"][6:].copy()
     B = np.zeros((nj, nj))
@@ -110,14 +113,14 @@ def equilibrium(support: str):
         B[:, j] = robot.outputs()["a"][6:] - a0
     robot.inputs.tau = np.linalg.solve(B, -a0)
     out = robot.outputs()
-    fts = Harness(ForceTorqueSensors, {**ROBOT})
-    fts.inputs.cut_wrenches = out["cut_wrenches"]
-    return {"robot": robot, "out": out, "fts": fts, "tether": tether, "mass": mass, "com": com,
+    fts = Harness(ForceTorqueSensors, {}, uses={"robot": model})        # default cuts: fts_joint_*
+    fts.inputs.joint_wrenches = out["joint_wrenches"]
+    return {"robot": robot, "model": model, "out": out, "fts": fts, "tether": tether, "mass": mass, "com": com,
             "parent": parent, "M": M, "links": links}
 
 
 def imu_at(eq, link, offset=(0.0, 0.0, 0.0), **params):
-    imu = Harness(Imu, {**ROBOT, "link": link, "offset": offset, **params})
+    imu = Harness(Imu, {"link": link, "offset": offset, **params}, uses={"robot": eq["model"]})
     for k in ("link_rotations", "link_poses", "link_velocities", "link_accelerations"):
         imu.set_input(k, eq["out"][k])
     return imu

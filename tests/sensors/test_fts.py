@@ -8,12 +8,28 @@ tail, the sign flips: the tail side pushes up with the weight of the part above.
 
 from __future__ import annotations
 
+import textwrap
+
 import numpy as np
 import pytest
 
 from hanging import G, equilibrium, subtree
+from snakesim.components.multibody.robot_model import RobotModel
 from snakesim.components.sensors import ForceTorqueSensors
 from snakesim.framework import Harness
+from snakesim.framework.registry import build_registry
+from snakesim.framework.session import load_session
+
+MODEL = RobotModel.load(design="eels-1.5")
+USES = {"robot": MODEL}
+SENSOR_ROWS = [MODEL.link_index(f"fts_{k:02d}") for k in (1, 2, 3)]
+
+
+def _joint_wrenches(cw):
+    """joint_wrenches[nl, 6] with ``cw`` in the sensor links' rows and values no sensor may read elsewhere."""
+    W = np.random.default_rng(0).uniform(-1e3, 1e3, (MODEL.nl, 6))
+    W[SENSOR_ROWS] = cw
+    return W
 
 
 def _expected(eq, support):
@@ -58,16 +74,16 @@ def test_reading_changes_sign_between_hanging_and_standing():
 
 def test_noise_bias_and_convention():
     cw = np.arange(18.0).reshape(3, 6)
-    h = Harness(ForceTorqueSensors, {"design": "eels-1.5", "convention": "child_on_parent",
-                                     "bias": {"fts_joint_02": [1, 0, 0, 0, 0, 2]}})
-    h.inputs.cut_wrenches = cw
+    h = Harness(ForceTorqueSensors, {"convention": "child_on_parent", "bias": {"fts_joint_02": [1, 0, 0, 0, 0, 2]}},
+                uses=USES)
+    h.inputs.joint_wrenches = _joint_wrenches(cw)
     expect = -cw
     expect[1] += [1, 0, 0, 0, 0, 2]
     np.testing.assert_array_equal(h.outputs()["wrench"], expect)
     n = 3000
-    noisy = Harness(ForceTorqueSensors, {"design": "eels-1.5", "force_noise": 0.5, "torque_noise": 0.02, "seed": 3},
-                    rate=100.0)
-    noisy.inputs.cut_wrenches = cw
+    noisy = Harness(ForceTorqueSensors, {"force_noise": 0.5, "torque_noise": 0.02, "seed": 3}, rate=100.0,
+                    uses=USES)
+    noisy.inputs.joint_wrenches = _joint_wrenches(cw)
     samples = []
     for _ in range(n):
         samples.append(noisy.outputs()["wrench"] - cw)
@@ -78,11 +94,46 @@ def test_noise_bias_and_convention():
     assert np.allclose(s[..., :3].std(axis=0), 0.5, rtol=tol)
     assert np.allclose(s[..., 3:].std(axis=0), 0.02, rtol=tol)
     assert np.abs(s.mean(axis=0)).max() < 5 * 0.5 / np.sqrt(n)
-    again = Harness(ForceTorqueSensors, {"design": "eels-1.5", "force_noise": 0.5, "torque_noise": 0.02, "seed": 3},
-                    rate=100.0)
-    again.inputs.cut_wrenches = cw
+    again = Harness(ForceTorqueSensors, {"force_noise": 0.5, "torque_noise": 0.02, "seed": 3}, rate=100.0,
+                    uses=USES)
+    again.inputs.joint_wrenches = _joint_wrenches(cw)
     np.testing.assert_array_equal(again.outputs()["wrench"] - cw, s[0])     # same seed, same draws
     with pytest.raises(ValueError, match="noise needs a sample rate"):
-        ForceTorqueSensors("fts", {"design": "eels-1.5", "force_noise": 0.5})
+        ForceTorqueSensors("fts", {"force_noise": 0.5}, uses=USES)
     with pytest.raises(ValueError, match="bias needs 6 finite values"):
-        ForceTorqueSensors("fts", {"design": "eels-1.5", "bias": {"*": [1, 2]}})
+        ForceTorqueSensors("fts", {"bias": {"*": [1, 2]}}, uses=USES)
+
+
+def test_cuts_by_joint_or_link_name_in_the_order_given():
+    """The sensors are the cuts as named (joints, links or patterns), in that order; nothing is set on the
+    multibody, which outputs every link's joint wrench."""
+    cw = np.arange(18.0).reshape(3, 6)
+    h = Harness(ForceTorqueSensors, {"cuts": ["fts_03", "fts_joint_01"]}, uses=USES)
+    assert h.c.sensor_names == ["fts_joint_03", "fts_joint_01"]
+    assert h.infos["wrench"].shape == (2, 6)
+    h.inputs.joint_wrenches = _joint_wrenches(cw)
+    np.testing.assert_array_equal(h.outputs()["wrench"], cw[[2, 0]])
+    with pytest.raises(ValueError, match=r"fts: cuts: cut 'fts_joint_9\*' matches no joint or link .*joints: "):
+        ForceTorqueSensors("fts", {"cuts": ["fts_joint_9*"]}, uses=USES)
+
+
+def test_in_a_scene_the_sensors_read_the_multibodys_rows_with_no_robot_keys(tmp_path):
+    """Wired as an assembly wires it: the sensors name no robot (they are handed the multibody's) and read
+    exactly the sensor links' rows of its joint_wrenches (a spinning body: non-zero internal wrenches)."""
+    (tmp_path / "s.yaml").write_text(textwrap.dedent("""
+        sim: {duration: 0.01, dt: 0.001}
+        components:
+          robot: {type: multibody, params: {design: eels-1.5, base_velocity: [0, 0, 0, 2.0, 1.0, 3.0]}}
+          fts: {type: force_torque_sensors}
+        connections:
+          - robot.joint_wrenches -> fts.joint_wrenches
+        record: [fts.wrench, robot.joint_wrenches]
+    """))
+    session = load_session(tmp_path / "s.yaml", registry=build_registry(load_entry_points=False))
+    assert session.plan.components["fts"].robot is session.plan.components["robot"].robot
+    res = session.run()
+    n = res["t"].size
+    w = res["fts.wrench"].reshape(n, 3, 6)
+    rows = res["robot.joint_wrenches"].reshape(n, MODEL.nl, 6)[:, SENSOR_ROWS]
+    assert np.abs(rows).max() > 1.0
+    np.testing.assert_array_equal(w, rows)

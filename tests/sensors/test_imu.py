@@ -7,8 +7,11 @@ import numpy as np
 import pytest
 
 from hanging import G, equilibrium, imu_at
+from snakesim.components.multibody.robot_model import RobotModel
 from snakesim.components.sensors import Imu
 from snakesim.framework import Harness
+
+EELS_15 = {"robot": RobotModel.load(design="eels-1.5")}
 
 
 def test_at_rest_reads_g_upward_and_zero_rate():
@@ -25,7 +28,7 @@ def test_free_fall_reads_zero():
     eq = equilibrium("tether")
     robot = eq["robot"]
     robot.inputs.wrenches = np.zeros_like(eq["out"]["link_poses"][:, :6])
-    robot.inputs.tau = np.zeros(len(robot.c.joint_names))
+    robot.inputs.tau = np.zeros(robot.c.robot.nj)
     eq["out"] = robot.outputs()
     out = imu_at(eq, "module_01", offset=(0.2, 0.0, 0.05)).outputs()
     np.testing.assert_allclose(out["specific_force"], 0.0, atol=1e-9)
@@ -33,7 +36,7 @@ def test_free_fall_reads_zero():
 
 def test_spinning_arm_reads_centripetal_acceleration_and_body_rate():
     w = 3.0
-    h = Harness(Imu, {"design": "eels-1.5", "link": "module_00", "offset": (0.2, 0.0, 0.0)})
+    h = Harness(Imu, {"link": "module_00", "offset": (0.2, 0.0, 0.0)}, uses=EELS_15)
     nl = h.infos["link_poses"].shape[0]
     c, s = np.cos(0.7), np.sin(0.7)
     R = np.array([[c, -s, 0], [s, c, 0], [0, 0, 1.0]])                  # link yawed 0.7 rad
@@ -52,8 +55,8 @@ def test_spinning_arm_reads_centripetal_acceleration_and_body_rate():
 
 def test_noise_is_seeded_held_per_sample_and_needs_a_rate():
     def make(seed):
-        h = Harness(Imu, {"design": "eels-1.5", "link": "tail", "gyro_noise": 0.01, "accel_noise": 0.1,
-                          "accel_bias": (0.5, 0.0, 0.0), "seed": seed}, rate=200.0)
+        h = Harness(Imu, {"link": "tail", "gyro_noise": 0.01, "accel_noise": 0.1, "accel_bias": (0.5, 0.0, 0.0),
+                          "seed": seed}, rate=200.0, uses=EELS_15)
         nl = h.infos["link_poses"].shape[0]
         h.inputs.link_rotations = np.broadcast_to(np.eye(3), (nl, 3, 3))
         return h
@@ -77,10 +80,10 @@ def test_noise_is_seeded_held_per_sample_and_needs_a_rate():
     assert np.allclose(s.std(axis=0), 0.1, rtol=5 / np.sqrt(2 * n))
     assert np.abs(s.mean(axis=0)).max() < 5 * 0.1 / np.sqrt(n)             # the bias is added, nothing else
     with pytest.raises(ValueError, match="noise needs a sample rate"):
-        Imu("imu", {"design": "eels-1.5", "link": "tail", "gyro_noise": 0.01})
+        Imu("imu", {"link": "tail", "gyro_noise": 0.01}, uses=EELS_15)
 
 
 def test_imu_frame_of_eels_1_0_head_and_unknown_link():
-    Imu("imu", {"design": "eels-1.0", "modules": 2, "head": True})        # the default link 'imu' exists
+    Imu("imu", {}, uses={"robot": RobotModel.load(design="eels-1.0", modules=2, head=True)})  # default link 'imu'
     with pytest.raises(ValueError, match="matches no name; valid: tail"):
-        Imu("imu", {"design": "eels-1.5", "link": "imu"})
+        Imu("imu", {"link": "imu"}, uses=EELS_15)

@@ -9,6 +9,7 @@ import textwrap
 import numpy as np
 import pytest
 
+from snakesim.components.multibody.robot_model import RobotModel
 from snakesim.components.tethers import Tethers, WrenchSum
 from snakesim.framework import Harness
 from snakesim.framework.registry import build_registry
@@ -22,7 +23,7 @@ BODY = ('<robot name="bob"><link name="bob"><inertial><origin xyz="0 0 0"/><mass
 
 def _harness(urdf, **spec):
     t = {"link": "bob", "anchor": (0.0, 0.0, 2.0), "stiffness": 1000.0, "damping": 0.0, "rest_length": 1.0, **spec}
-    h = Harness(Tethers, {"urdf": urdf, "tethers": [t]})
+    h = Harness(Tethers, {"tethers": [t]}, uses={"robot": RobotModel.load(urdf=urdf)})
     nl = h.infos["link_poses"].shape[0]
     h.inputs.link_rotations = np.broadcast_to(np.eye(3), (nl, 3, 3))
     return h, nl
@@ -64,11 +65,12 @@ def test_schedule_and_input_attach_and_release():
     assert h.outputs(3.0)["tension"][0] == pytest.approx(1000.0)
     h.inputs.attached = [0.0]
     assert h.outputs(1.5)["tension"][0] == 0.0
+    bob = {"robot": RobotModel.load(urdf=BODY.format(m=1.0))}
     with pytest.raises(ValueError, match="not in the robot; links: bob, mark"):
-        Tethers("t", {"urdf": BODY.format(m=1.0), "tethers": [{"link": "arm", "anchor": (0, 0, 0), "rest_length": 1}]})
+        Tethers("t", {"tethers": [{"link": "arm", "anchor": (0, 0, 0), "rest_length": 1}]}, uses=bob)
     with pytest.raises(ValueError, match="release 1 s must come after attach 2 s"):
-        Tethers("t", {"urdf": BODY.format(m=1.0), "tethers": [{"link": "bob", "anchor": (0, 0, 0), "rest_length": 1,
-                                                               "attach": 2.0, "release": 1.0}]})
+        Tethers("t", {"tethers": [{"link": "bob", "anchor": (0, 0, 0), "rest_length": 1, "attach": 2.0,
+                                   "release": 1.0}]}, uses=bob)
 
 
 def test_hanging_body_oscillates_at_sqrt_k_over_m_then_falls_when_released(tmp_path):
@@ -82,10 +84,9 @@ def test_hanging_body_oscillates_at_sqrt_k_over_m_then_falls_when_released(tmp_p
           rope:
             type: tethers
             params:
-              urdf: "{u}"
               tethers: [{{link: bob, anchor: [0, 0, 1.0], stiffness: {k}, damping: 0, rest_length: 1.0,
                           release: {t_rel}}}]
-          both: {{type: wrench_sum, params: {{urdf: "{u}"}}}}
+          both: {{type: wrench_sum}}
         connections:
           - robot.link_rotations -> rope.link_rotations
           - robot.link_poses -> rope.link_poses
@@ -113,7 +114,11 @@ def test_hanging_body_oscillates_at_sqrt_k_over_m_then_falls_when_released(tmp_p
 
 
 def test_wrench_sum_keeps_the_link_shape():
-    h = Harness(WrenchSum, {"nl": 3, "signs": [1.0, -1.0]})
+    h = Harness(WrenchSum, {"nl": 3, "signs": [1.0, -1.0]})           # no robot: nl given
     a, b = np.arange(18.0).reshape(3, 6), np.ones((3, 6))
     h.inputs.u0, h.inputs.u1 = a, b
     np.testing.assert_array_equal(h.outputs()["y"], a - b)
+    robot = RobotModel.load(urdf=BODY.format(m=1.0))
+    assert Harness(WrenchSum, {}, uses={"robot": robot}).infos["y"].shape == (robot.nl, 6)   # the robot's nl
+    with pytest.raises(ValueError, match="give 'nl'"):
+        WrenchSum("w", {})

@@ -78,7 +78,7 @@ def run(tmp_path, urdf, dt, armature):
         "sim": {"duration": STEPS * dt, "dt": dt, "integrator": "rk4"},
         "components": {
             "robot": {"type": "multibody", "params": robot},
-            "spring": {"type": "joint_spring_damper", "params": {"urdf": str(urdf), "stiffness": {"bend_00": K}}},
+            "spring": {"type": "joint_spring_damper", "params": {"stiffness": {"bend_00": K}}},
         },
         "connections": ["robot.joint_q -> spring.q", "robot.joint_v -> spring.v", "spring.tau -> robot.tau"],
         "record": ["robot.energy", "robot.joint_q"],

@@ -8,12 +8,13 @@ import numpy as np
 import pytest
 from pydantic import ValidationError
 
-from snakesim.components.control.robot_source import joint_names
 from snakesim.components.control.screw_schedule import ScrewSchedule
 from snakesim.components.monitors.planar_pose import PlanarPose
+from snakesim.components.multibody.robot_model import RobotModel
 from snakesim.framework.harness import Harness
 
-ROBOT = {"design": "eels-1.0", "modules": 4, "head": False}
+ROBOT = RobotModel.load(design="eels-1.0", modules=4, head=False)
+USES = {"robot": ROBOT}
 
 
 def _out(h, t):
@@ -22,9 +23,9 @@ def _out(h, t):
 
 
 def test_schedule_switches_phases_and_groups_split_the_modules():
-    h = Harness(ScrewSchedule, {**ROBOT, "hold": {"bend_*": 0.2}, "times": [1.0, 2.0],
-                                "speeds": [{"all": 3.0}, {"head_half": 1.0, "tail_half": -1.0}]})
-    names = list(joint_names(h.c.p))
+    h = Harness(ScrewSchedule, {"hold": {"bend_*": 0.2}, "times": [1.0, 2.0],
+                                "speeds": [{"all": 3.0}, {"head_half": 1.0, "tail_half": -1.0}]}, uses=USES)
+    names = list(h.c.robot.joints)
     screw = np.array([n.startswith("screw_") for n in names])
     bend = np.array([n.startswith("bend_") for n in names])
     module = np.array([int(n[-2:]) for n in names])
@@ -46,11 +47,11 @@ def test_schedule_switches_phases_and_groups_split_the_modules():
 ])
 def test_schedule_rejects_bad_phases_with_a_clear_error(params, message):
     with pytest.raises((ValueError, ValidationError), match=message):
-        ScrewSchedule("phases", {**ROBOT, **params})
+        ScrewSchedule("phases", params, uses=USES)
 
 
 def test_planar_pose_reads_the_heading_of_the_body_axis_even_when_rolled():
-    h = Harness(PlanarPose, {**ROBOT, "link": "tail"})
+    h = Harness(PlanarPose, {"link": "tail"}, uses=USES)
     nl = h.u.link_poses.shape[0]
     psi, roll = 0.7, math.pi / 2
     Rz = np.array([[math.cos(psi), -math.sin(psi), 0], [math.sin(psi), math.cos(psi), 0], [0, 0, 1]])
@@ -65,4 +66,4 @@ def test_planar_pose_reads_the_heading_of_the_body_axis_even_when_rolled():
 
 def test_planar_pose_rejects_an_unknown_link():
     with pytest.raises(ValueError, match="'nose' is not a link"):
-        PlanarPose("p", {**ROBOT, "link": "nose"})
+        PlanarPose("p", {"link": "nose"}, uses=USES)

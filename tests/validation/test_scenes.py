@@ -45,7 +45,7 @@ def test_dangling_swing_reaches_the_tube_wall():
     assert r.summary["completed"], r.summary
     assert r["contact.normal_force"][:, 0].max() > 0
     # screws stay inside the tube: contact depth bounded by the penalty force (k = 1e5 N/m)
-    names = s.plan.components["robot"].link_names
+    names = s.plan.components["robot"].robot.links
     poses = r["robot.link_poses"].reshape(len(r["t"]), len(names), 7)
     screws = [i for i, n in enumerate(names) if n.startswith("screw_")]
     radial = np.hypot(poses[:, screws, 0], poses[:, screws, 1])
@@ -59,7 +59,7 @@ def test_climb_presses_both_walls_then_the_monitor_stops_the_failed_run():
     assert reason.startswith("monitor: mobility failure") and "limit 60.0 deg" in reason, reason
     assert r["monitor.failed"][-1] == 1.0 and r["monitor.max_tilt"][-1] > math.radians(60.0)
     # before the release (1.5 s) the pushed C touches both walls
-    names = s.plan.components["robot"].link_names
+    names = s.plan.components["robot"].robot.links
     t = r["t"]
     i = np.searchsorted(t, 1.4)
     lay = s.plan.components["contact"].layout
@@ -108,7 +108,7 @@ def test_u_channel_settles_onto_the_floor_then_holds_and_turns_its_screws():
     late = t >= 1.2
     assert r["contact.normal_force"][late, 0].mean() == pytest.approx(_weight(s), rel=0.25)
     # the drive hand-over: screws at screw_speed (3 rad/s) from hold + drive_delay, still before it
-    names = s.plan.components["robot"].joint_names
+    names = s.plan.components["robot"].robot.joints
     screws = [k for k, n in enumerate(names) if n.startswith("screw_")]
     v = r["robot.joint_v"][:, screws]
     assert np.abs(v[t < hold + 0.45]).max() < 0.3

@@ -45,7 +45,7 @@ def _com_shift(r, t0, t1):
 
 def test_initial_shape_is_the_crescent_with_its_chord_along_x(traverse):
     s, r = traverse
-    names = s.plan.components["robot"].link_names
+    names = s.plan.components["robot"].robot.links
     poses = r["robot.link_poses"][0].reshape(len(names), 7)
     mods = np.array([poses[names.index(n), :3] for n in names if n.startswith("module_")])
     chord = mods[-1] - mods[0]
@@ -78,7 +78,7 @@ def test_screws_track_the_schedule(traverse):
     s, r = traverse
     w = _window(r, 1.5, 1.95)                                       # late in the all-forward phase
     sp, v = r["phases.setpoint"][w], r["robot.joint_v"][w]
-    screws = np.array([n.startswith("screw_") for n in s.plan.components["robot"].joint_names])
+    screws = np.array([n.startswith("screw_") for n in s.plan.components["robot"].robot.joints])
     err = np.abs(v[:, screws] - sp[:, screws]).max()
     assert err < 0.05 * np.abs(sp[0, screws]).max()
 

@@ -10,6 +10,7 @@ settle has latched.
 import numpy as np
 import pytest
 
+from snakesim.components.placement import SettlePhase
 from snakesim.components.viz import entities as E
 from snakesim.components.viz.attach import attach_viewer
 from snakesim.components.viz.target import VizTarget
@@ -46,7 +47,7 @@ def test_attraction_arrows_pull_the_screws_onto_the_floor_then_vanish_at_the_lat
     _, org = rec.columns("/" + E.ATTRACTION, "Arrows3D:origins")
     tp, phase = rec.columns("/" + E.series_path(P + "settle.phase"), "Scalars:scalars")
     phase = np.interp(t, tp, np.ravel(phase))
-    settling = phase < 0.5
+    settling = phase < SettlePhase.SETTLING + 0.5              # interpolated to the arrow frames
     assert settling.any() and (~settling).any(), "the run should cover settling and the latch"
     pulled = 0
     for a, o, s in zip(vec, org, settling):

@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from snakesim.components.terrain import SdfGrid, available_terrains, load_terrain
-from snakesim.components.viz.robot_geometry import RobotSource, link_meshes, meshes_from_urdf
+from snakesim.components.multibody.robot_model import RobotModel
+from snakesim.components.viz.robot_geometry import link_meshes, meshes_from_urdf
 from snakesim.components.viz.terrain_geometry import terrain_mesh
 
 F32 = 1e-5      # vertices are float32: ~1e-7 relative over a few metres
@@ -62,7 +63,7 @@ def test_link_meshes_match_the_urdf_visuals():
 
     desc = load_robot("eels-1.0", modules=2)
     root = ET.fromstring(desc.urdf)
-    meshes = {m.link: m for m in link_meshes(RobotSource(design="eels-1.0", modules=2))}
+    meshes = {m.link: m for m in link_meshes(RobotModel.load(design="eels-1.0", modules=2))}
     assert list(meshes) == [ln.get("name") for ln in root.findall("link") if ln.find("visual") is not None]
     # a module shell: a cylinder along x (rpy 0 pi/2 0) from its origin to x = length
     el = root.find("link[@name='module_00']/visual/geometry/cylinder")

@@ -9,7 +9,7 @@ from viz_scenes import SCENE
 
 from snakesim.components.viz import entities as E
 from snakesim.components.viz.attach import viewer_period
-from snakesim.components.viz.sink import link_names
+from snakesim.components.multibody.robot_model import RobotModel
 
 DT, DURATION = 0.001, 0.2
 PERIOD = viewer_period(DT, [])                  # 33 steps: 30.3 Hz
@@ -32,7 +32,7 @@ def live(tmp_path_factory):
 
 
 def _links():
-    return link_names({"design": "eels-1.0", "modules": 2, "head": True})
+    return RobotModel.load(design="eels-1.0", modules=2, head=True).links
 
 
 def _links_with_visuals():
@@ -114,19 +114,20 @@ def test_replay_of_the_out_folder_has_the_same_entities(live, read_rrd, cli_runn
 
 def test_replay_computes_poses_from_q_when_link_poses_were_not_recorded(live):
     """Forward kinematics of the recorded q through the robot component reproduces the recorded poses."""
-    from snakesim.components.viz.replay import _robot_poses, load_run
+    from snakesim.components.viz.replay import _robot_poses, build_robot, load_run
     from snakesim.framework.registry import default_registry
 
     cfg, columns, data, _ = load_run(live / "out")
     params = cfg["components"]["robot"]["params"]
-    cls = default_registry().component("multibody")
+    comp = build_robot("robot", default_registry().component("multibody"), params)
     links = _links()
-    poses, t, note = _robot_poses("robot", cls, params, columns, data, ["robot.q"], links)
+    assert comp.robot.links == links
+    poses, t, note = _robot_poses(comp, columns, data, ["robot.q"])
     assert note is None and poses.shape == (len(data), len(links), 7)
-    recorded, _, _ = _robot_poses("robot", cls, params, columns, data, ["robot.link_poses"], links)
+    recorded, _, _ = _robot_poses(comp, columns, data, ["robot.link_poses"])
     np.testing.assert_allclose(poses, recorded, atol=1e-12)
     # neither recorded: the initial pose and a note saying what to record
-    poses, t, note = _robot_poses("robot", cls, params, columns, data, [], links)
+    poses, t, note = _robot_poses(comp, columns, data, [])
     assert poses.shape == (1, len(links), 7) and "record" in note
     np.testing.assert_allclose(poses[0], recorded[0], atol=1e-12)
 

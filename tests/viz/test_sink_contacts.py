@@ -1,11 +1,11 @@
-"""Contacts from any structured port with points/forces: split into normal and friction arrows."""
-
-import dataclasses
+"""Contacts from any structured port of type ContactSet (matched by type, whatever the port's name):
+split into normal and friction arrows."""
 
 import numpy as np
 
 from viz_scenes import SCENE
 
+from snakesim.components.contact import ContactSet
 from snakesim.components.viz import entities as E
 from snakesim.components.viz.attach import attach_viewer
 from snakesim.components.viz.target import VizTarget
@@ -15,14 +15,6 @@ from snakesim.framework.registry import build_registry
 from snakesim.framework.session import Session
 
 
-@dataclasses.dataclass(frozen=True)
-class Touch:
-    points: np.ndarray
-    normals: np.ndarray
-    forces: np.ndarray
-    normal_force: np.ndarray
-
-
 N_AT = lambda t: int(t * 100) % 3          # noqa: E731  (0, 1 or 2 contacts: sizes change frame to frame)
 
 
@@ -30,12 +22,14 @@ class FakeContacts(Component):
     """k = N_AT(t) contacts at (i, 0, 0), normal +z, F = (3, 0, 10) N: F_n = 10 N, friction (3, 0, 0) N."""
 
     type_name = "fake_contacts"
-    touch = Output(type=Touch, feedthrough=())
+    touch = Output(type=ContactSet, feedthrough=())
 
     def output(self, t, x, u, y):
         k = N_AT(t)
-        y.touch = Touch(np.column_stack([np.arange(k), np.zeros(k), np.zeros(k)]).astype(float),
-                        np.tile([0.0, 0.0, 1.0], (k, 1)), np.tile([3.0, 0.0, 10.0], (k, 1)), np.full(k, 10.0))
+        z3 = np.zeros((k, 3))
+        y.touch = ContactSet(t, np.column_stack([np.arange(k), np.zeros(k), np.zeros(k)]).astype(float),
+                             np.tile([0.0, 0.0, 1.0], (k, 1)), np.tile([3.0, 0.0, 10.0], (k, 1)), np.full(k, 10.0),
+                             np.zeros(k), z3, np.zeros(k, dtype=np.int64), np.zeros(k, dtype=np.int64))
 
 
 def test_contact_arrows_are_split_and_scaled(tmp_path, read_rrd):

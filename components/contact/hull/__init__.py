@@ -7,8 +7,8 @@ Component ``hull_contact`` (:class:`HullContact`); the SDF back end is ``screw_s
 
 from .component import HullContact, HullContactParams
 from .decompose import hull_error, screw_mesh, slab_hulls, to_coal_convex
-from .robot_geometry import RobotGeometry, build_robot_geometry
+from .robot_geometry import GeometryOptions, RobotGeometry, build_robot_geometry, robot_geometry
 from .terrain_geometry import terrain_parts
 
 __all__ = ["HullContact", "HullContactParams", "hull_error", "screw_mesh", "slab_hulls", "to_coal_convex",
-           "RobotGeometry", "build_robot_geometry", "terrain_parts"]
+           "GeometryOptions", "RobotGeometry", "build_robot_geometry", "robot_geometry", "terrain_parts"]

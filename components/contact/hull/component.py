@@ -2,6 +2,7 @@
 convex collision pieces with the terrain and with each other, forces by eqs. 2 and 6.
 
 hull_contact:
+    uses robot: RobotModel      (the multibody's: links, URDF collision shapes, screw metadata)
     in   link_poses[nl,7]       [x, y, z, qx, qy, qz, qw] of each URDF link, world
          link_velocities[nl,6]  [v of link origin, ω], world
          joint_v[nj]            rad/s, accepted so the SDF back end's wiring fits unchanged;
@@ -16,8 +17,8 @@ hull_contact:
          contact_set            ContactSet of the robot–terrain contacts (contact_set.py)
          (all feedthrough from all inputs)
     The ports named as the SDF back end's (screw_sdf_contact) mean the same, so an
-    assembly swaps back ends by changing the type; the robot source and ``material``
-    override parameters are shared too.
+    assembly swaps back ends by changing the type; both take the multibody's robot, and
+    the ``material`` override parameter is shared too.
 
 Geometry (robot_geometry.py, terrain_geometry.py, decompose.py): the URDF's collision
 shapes (screw envelope cylinders cut into ``cylinder_slices``, module cylinders, boxes;
@@ -50,21 +51,20 @@ from typing import Literal
 import numpy as np
 from pydantic import Field
 
-from snakesim.framework import Component, Input, Output
+from snakesim.framework import Component, Input, Output, Params, Uses
+from snakesim.components.multibody.robot_model import RobotModel
 from snakesim.components.terrain import Terrain
 
 from ..contact_set import ContactSet
 from ..kernels import EV_FLOOR, MODES
 from ..kernels_numba import body_wrenches_nb, contact_forces_nb
-from ..robot_screws import RobotSource
 from ..screw_sdf import MaterialOverride
 from .narrow import Narrowphase
-from .robot_geometry import build_robot_geometry
+from .robot_geometry import GeometryOptions, robot_geometry
 from .terrain_geometry import terrain_parts
 
 
-class HullContactParams(RobotSource):
-    # robot source (urdf, design, modules, head, robot): the multibody's, give both the same
+class HullContactParams(Params):
     material: MaterialOverride | None = Field(None, description="overrides the terrain materials' k, c, mu, ev_a, ev_b")
     # geometry
     screw_geometry: Literal["envelope", "blades"] = Field(
@@ -88,40 +88,6 @@ class HullContactParams(RobotSource):
     ev_floor: float = Field(EV_FLOOR, gt=0)
 
 
-def _robot(p):
-    """(URDF text, source label, metadata or None, folder for relative mesh paths)."""
-    from pathlib import Path
-
-    from snakesim.components.multibody.layout import robot_text
-
-    text, source = robot_text(p)
-    if p.design is None:
-        base = Path(p.urdf).expanduser().parent if not p.urdf.lstrip().startswith("<") else Path(".")
-        return text, source, None, base
-    from snakesim.robots import load_robot
-
-    desc = load_robot(p.design, modules=p.modules, head=p.head, urdf=p.urdf, **p.robot)
-    return text, source, desc.metadata, desc.base_dir
-
-
-def _nl(p):
-    from snakesim.components.multibody.layout import layout_of
-    return layout_of(_Src(p)).nl
-
-
-def _nj(p):
-    from snakesim.components.multibody.layout import layout_of
-    return layout_of(_Src(p)).nj
-
-
-class _Src:
-    """The multibody's layout cache keyed on this component's robot source."""
-
-    def __init__(self, p):
-        self.urdf, self.design, self.modules, self.head, self.robot = p.urdf, p.design, p.modules, p.head, p.robot
-        self.fts_cuts = []
-
-
 def quat_to_R(q: np.ndarray) -> np.ndarray:
     """(n,4) [x, y, z, w] -> (n,3,3)."""
     x, y, z, w = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
@@ -135,11 +101,13 @@ class HullContact(Component[HullContactParams]):
     type_name = "hull_contact"
     Params = HullContactParams
 
-    link_poses = Input(shape=lambda p: (_nl(p), 7), unit=None)
-    link_velocities = Input(shape=lambda p: (_nl(p), 6), unit=None)
-    joint_v = Input(shape=lambda p: (_nj(p),), unit="rad/s", default=0.0)
+    robot = Uses(RobotModel)
+    link_poses = Input(shape=lambda c: (c.robot.nl, 7), unit=None)
+    link_velocities = Input(shape=lambda c: (c.robot.nl, 6), unit=None)
+    joint_v = Input(shape=lambda c: (c.robot.nj,), unit="rad/s", default=0.0, names=lambda c: c.robot.joints)
     terrain = Input(type=Terrain)
-    wrenches = Output(shape=lambda p: (_nl(p), 6), unit=None, feedthrough=True)
+    wrenches = Output(shape=lambda c: (c.robot.nl, 6), unit=None, feedthrough=True,
+                      names=lambda c: tuple(f"{ln}.{k}" for ln in c.robot.links for k in ("fx", "fy", "fz", "tx", "ty", "tz")))
     normal_force = Output(shape=(1,), unit="N", feedthrough=True)
     contacts = Output(shape=(1,), unit="1", feedthrough=True)
     body_normal_force = Output(shape=(1,), unit="N", feedthrough=True)
@@ -147,20 +115,21 @@ class HullContact(Component[HullContactParams]):
     contact_set = Output(type=ContactSet, feedthrough=True, calc="calc_contact_set")
 
     def setup(self):
-        p = self.p
-        text, source, meta, base = _robot(p)
-        self.geo = build_robot_geometry(
-            text, source, meta, base, cylinder_slices=p.cylinder_slices, screw_geometry=p.screw_geometry,
-            blade_hulls=p.blade_hulls, mesh_hulls=p.mesh_hulls, min_module_gap=p.min_module_gap)
-        if p.screw_geometry == "blades" and not (meta or {}).get("screws"):
-            raise ValueError(f"{self.name}: screw_geometry 'blades' needs a design with screws (got {source})")
+        p, robot = self.p, self.robot
+        if p.screw_geometry == "blades" and not robot.metadata.get("screws"):
+            raise ValueError(f"{self.name}: screw_geometry 'blades' needs a design with screws (got {robot.label}, "
+                             "which has none); use screw_geometry: envelope")
+        # shared by every hull_contact of this robot with these options (read-only here)
+        self.geo = robot.derived(robot_geometry, GeometryOptions(
+            cylinder_slices=p.cylinder_slices, screw_geometry=p.screw_geometry, blade_hulls=p.blade_hulls,
+            mesh_hulls=p.mesh_hulls, min_module_gap=p.min_module_gap))
         import coal
 
         self._T = [coal.Transform3s() for _ in range(self.geo.n_pieces)]
         self._narrow = Narrowphase(p.max_contacts)
         self._terrain, self._parts = None, []
         self._mode = MODES[p.regularisation]
-        self.link_names = self.geo.link_names
+        self.link_names = robot.links
         self.last: dict[str, np.ndarray] = {}
         self._seen = None
 
@@ -289,12 +258,12 @@ class HullContact(Component[HullContactParams]):
         s = self._seen
         if s is None or not (u.terrain is s[0] and np.array_equal(u.link_poses, s[1])
                              and np.array_equal(u.link_velocities, s[2])):
-            self.output(t, x, u, _Scratch(len(self.link_names)))    # the last evaluation was at other inputs
+            self.output(t, x, u, _Scratch(self.robot.nl))    # the last evaluation was at other inputs
         c = self.last
         y.contact_set = ContactSet(t=float(t), points=c["point"].copy(), normals=c["normal"].copy(),
                                    forces=c["force"].copy(), normal_force=c["fn"].copy(), depth=c["depth"].copy(),
                                    slip=c["slip"].copy(), link=c["link"].copy(), material=c["material"].copy(),
-                                   link_names=tuple(self.link_names))
+                                   link_names=self.robot.links)
 
 
 class _Scratch:

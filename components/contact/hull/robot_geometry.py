@@ -24,6 +24,10 @@ Two pieces are tested against each other when their links' positions differ by a
 screw envelopes, and neighbours touch at the bend housings), and never when one link is
 the other's parent. A bare URDF (no design metadata) uses the number of moving joints on
 the tree path between the two links instead, ≥ ``min_module_gap`` + 1.
+
+Built from the multibody's :class:`RobotModel` (its URDF text and parsed tree, metadata,
+``base_dir`` for relative mesh paths, ``screw_meshes`` for generated screw meshes not on
+disk) once per robot and geometry options: ``robot.derived(robot_geometry, options)``.
 """
 
 from __future__ import annotations
@@ -35,7 +39,8 @@ from pathlib import Path
 
 import numpy as np
 
-from snakesim.components.multibody.urdf import MultibodyModelError, parse_urdf, rpy_matrix
+from snakesim.components.multibody.robot_model import RobotModel
+from snakesim.components.multibody.urdf import MultibodyModelError, rpy_matrix
 
 from .decompose import screw_mesh, slab_hulls, to_coal_convex
 
@@ -82,7 +87,25 @@ def _blade_hulls(geometry, n):
     return slab_hulls(screw_mesh(geometry), n, axis=(1.0, 0.0, 0.0))
 
 
-def _geometry_pieces(geom_el, where, base_dir, cylinder_slices, mesh_hulls):
+def _mesh(el, where, base_dir, screw_meshes):
+    """trimesh of a <mesh> collision element: the file (relative to base_dir), else a generated screw mesh."""
+    import trimesh
+
+    fname = el.get("filename", "")
+    name = fname
+    for prefix in ("package://", "file://"):
+        name = name.removeprefix(prefix)
+    path = Path(name)
+    path = path if path.is_absolute() else base_dir / path
+    if path.is_file():
+        return trimesh.load(path, force="mesh")
+    geometry = screw_meshes.get(Path(name).name)
+    if geometry is not None:
+        return screw_mesh(geometry)
+    raise MultibodyModelError(f"{where}: collision mesh '{fname}' not found (looked at {path})")
+
+
+def _geometry_pieces(geom_el, where, base_dir, screw_meshes, cylinder_slices, mesh_hulls):
     """[(coal shape, offset in the element frame, sphere centre in the element frame, radius)]."""
     import coal
 
@@ -109,14 +132,7 @@ def _geometry_pieces(geom_el, where, base_dir, cylinder_slices, mesh_hulls):
         r = num(el, "radius")[0]
         return [(coal.Sphere(r), np.zeros(3), np.zeros(3), r)]
     if el.tag == "mesh":
-        import trimesh
-
-        fname = el.get("filename", "")
-        path = Path(fname.removeprefix("file://"))
-        path = path if path.is_absolute() else base_dir / path
-        if not path.is_file():
-            raise MultibodyModelError(f"{where}: collision mesh '{fname}' not found (looked at {path})")
-        mesh = trimesh.load(path, force="mesh")
+        mesh = _mesh(el, where, base_dir, screw_meshes)
         if el.get("scale"):
             mesh.apply_scale(num(el, "scale"))
         ext = mesh.bounds[1] - mesh.bounds[0]
@@ -163,16 +179,39 @@ def _joint_distance(tree, a, b):
     return moving
 
 
-def build_robot_geometry(urdf_text: str, source: str, metadata: dict | None, base_dir: Path, *,
-                         cylinder_slices: int = 3, screw_geometry: str = "envelope", blade_hulls: int = 8,
-                         mesh_hulls: int = 4, min_module_gap: int = 2) -> RobotGeometry:
+@dataclasses.dataclass(frozen=True)
+class GeometryOptions:
+    """How the collision pieces are cut (hull_contact's parameters of the same names); hashable, so it keys
+    :meth:`RobotModel.derived`."""
+
+    cylinder_slices: int = 3
+    screw_geometry: str = "envelope"
+    blade_hulls: int = 8
+    mesh_hulls: int = 4
+    min_module_gap: int = 2
+
+
+def robot_geometry(robot: RobotModel, options: GeometryOptions = GeometryOptions()) -> RobotGeometry:
+    """Collision pieces of every link of ``robot`` (its link rows); call it as
+    ``robot.derived(robot_geometry, options)``: built once per robot and options, read-only afterwards."""
+    base_dir = robot.base_dir if robot.base_dir is not None else Path(".")
+    return build_robot_geometry(robot, base_dir, **dataclasses.asdict(options))
+
+
+def build_robot_geometry(robot: RobotModel, base_dir: Path, *, cylinder_slices: int = 3,
+                         screw_geometry: str = "envelope", blade_hulls: int = 8, mesh_hulls: int = 4,
+                         min_module_gap: int = 2) -> RobotGeometry:
     """Collision pieces of every link (URDF document order = the multibody's link rows)."""
     from snakesim.robots.screw_mesh import ScrewGeometry
 
-    tree = parse_urdf(urdf_text, source)
-    names = [ln.name for ln in tree.links]
-    row = {n: i for i, n in enumerate(names)}
-    screws = {s["link"]: s for s in (metadata or {}).get("screws", [])}
+    if screw_geometry not in ("envelope", "blades"):
+        raise ValueError(f"screw_geometry '{screw_geometry}' is not one of envelope, blades")
+    tree, metadata, source = robot.tree, robot.metadata, robot.label
+    names = list(robot.links)
+    row = robot.link_row
+    screws = {s["link"]: s for s in metadata.get("screws") or []}
+    if screw_geometry == "blades" and not screws:
+        raise ValueError(f"screw_geometry 'blades' needs a design with screws (got {source}, which has none)")
     hand, lead = np.zeros(len(names)), np.zeros(len(names))
     for link, s in screws.items():
         hand[row[link]] = 1.0 if s["hand"] == "right" else -1.0
@@ -189,8 +228,7 @@ def build_robot_geometry(urdf_text: str, source: str, metadata: dict | None, bas
             cs.append(R_el @ (off + c) + p_el)
             rs.append(r)
 
-    robot = ET.fromstring(urdf_text)
-    for el in robot.findall("link"):
+    for el in ET.fromstring(robot.urdf).findall("link"):
         link = el.get("name")
         if screw_geometry == "blades" and link in screws:
             s = screws[link]
@@ -206,7 +244,8 @@ def build_robot_geometry(urdf_text: str, source: str, metadata: dict | None, bas
             o = col.find("origin")
             R_el = rpy_matrix([float(v) for v in o.get("rpy", "0 0 0").split()]) if o is not None else np.eye(3)
             p_el = np.array([float(v) for v in o.get("xyz", "0 0 0").split()]) if o is not None else np.zeros(3)
-            add(link, _geometry_pieces(geom, where, base_dir, cylinder_slices, mesh_hulls), R_el, p_el)
+            add(link, _geometry_pieces(geom, where, base_dir, robot.screw_meshes, cylinder_slices, mesh_hulls),
+                R_el, p_el)
 
     link_of = np.array(link_of, dtype=np.int64)
     pos = _positions(tree, metadata)
