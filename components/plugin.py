@@ -9,7 +9,7 @@ from snakesim.framework import hookimpl
 from .contact.friction_fit_cli import snakesim_add_commands  # noqa: F401  (hookimpl: `snakesim fit-friction`)
 from .contact.point_contact import PointContact
 from .contact.hull import HullContact
-from .contact.screw_drive import ScrewDrive
+from .control.screw_drive import ScrewDrive
 from .contact.screw_sdf import ScrewSdfContact
 from .control import CsvTrajectory, JointPid, JointSetpoints, JointSpringDamper, Schedule, SerpenoidGait
 from .examples.mass_spring import PointMass, SpringDamper

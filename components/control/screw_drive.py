@@ -23,7 +23,7 @@ from pydantic import Field
 from snakesim.framework import Component, Input, Output, Params, Uses
 from snakesim.components.multibody.robot_model import RobotModel
 
-from .robot_screws import screw_layout
+from ..contact.robot_screws import screw_layout
 
 
 class ScrewDriveParams(Params):
