@@ -3,6 +3,11 @@
     q   = Input(shape="n", unit="rad")
     tau = Output(shape="n", unit="N*m", feedthrough=("q_ref", "q"))
 
+``role`` says what a port carries in its domain's vocabulary (an opaque
+string to the framework, e.g. "link_poses" or "joint_positions"): sinks such
+as a viewer or a ROS publisher find ports by role or structured type, never
+by guessing from port names.
+
 ``feedthrough`` lists the inputs an output depends on directly (``True`` for
 all, ``()`` for none: a function of state only). The scheduler orders
 evaluations and rejects algebraic loops from it. ``calc`` names a method that
@@ -25,9 +30,10 @@ class Port:
     kind = "port"
 
     def __init__(self, shape: ShapeSpec = (), *, unit: str | None = "1", dtype: Any = np.float64,
-                 type: type | None = None, names=None, doc: str = ""):
+                 type: type | None = None, names=None, doc: str = "", role: str | None = None):
         self.signal = Structured(type) if type is not None else Numeric(shape, dtype, unit, names)
         self.doc = doc
+        self.role = role
         self.name = "?"
 
     def __set_name__(self, owner, name):
@@ -52,8 +58,8 @@ class Input(Port):
 
     def __init__(self, shape: ShapeSpec = (), *, unit: str | None = "1", dtype: Any = np.float64,
                  type: type | None = None, names=None, required: bool = True, default: Any = None,
-                 doc: str = ""):
-        super().__init__(shape, unit=unit, dtype=dtype, type=type, names=names, doc=doc)
+                 doc: str = "", role: str | None = None):
+        super().__init__(shape, unit=unit, dtype=dtype, type=type, names=names, doc=doc, role=role)
         self.required = required and default is None
         self.default = default
 
@@ -65,8 +71,8 @@ class Output(Port):
 
     def __init__(self, shape: ShapeSpec = (), *, unit: str | None = "1", dtype: Any = np.float64,
                  type: type | None = None, names=None, feedthrough: bool | tuple[str, ...] = True,
-                 calc: str | None = None, doc: str = ""):
-        super().__init__(shape, unit=unit, dtype=dtype, type=type, names=names, doc=doc)
+                 calc: str | None = None, doc: str = "", role: str | None = None):
+        super().__init__(shape, unit=unit, dtype=dtype, type=type, names=names, doc=doc, role=role)
         self.feedthrough = feedthrough
         self.calc = calc
 

@@ -6,7 +6,7 @@ import inspect
 
 
 def _signal(port) -> str:
-    return port.describe()
+    return port.describe() + (f" (role: {port.role})" if port.role else "")
 
 
 def component_reference(registry) -> dict:

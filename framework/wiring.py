@@ -30,6 +30,7 @@ class PortInfo:
     signal: object
     shape: tuple | None
     unit: str | None
+    role: str | None = None
 
     def describe(self) -> str:
         return self.signal.describe(self.shape) if not isinstance(self.signal, Structured) else self.signal.describe()
@@ -49,13 +50,13 @@ def port_infos(comp: Component) -> dict[str, PortInfo]:
     for name, port in {**comp.inputs, **comp.outputs}.items():
         sig = port.signal
         if isinstance(sig, Structured):
-            out[name] = PortInfo(sig, None, None)
+            out[name] = PortInfo(sig, None, None, port.role)
             continue
         try:
             shape = resolve_shape(sig.shape, comp, f"{comp.name}.{name}")
         except (AttributeError, ValueError, TypeError) as e:
             raise BuildError(str(e)) from None
-        out[name] = PortInfo(sig, shape, normalize_unit(sig.unit))
+        out[name] = PortInfo(sig, shape, normalize_unit(sig.unit), port.role)
     return out
 
 
@@ -93,5 +94,7 @@ def check_compatible(src: PortRef, si: PortInfo, dst: PortRef, di: PortInfo, whe
             problem = "shapes differ"
         elif di.unit is not None and si.unit is not None and si.unit != di.unit:
             problem = "units differ"
+    if problem is None and si.role and di.role and si.role != di.role:
+        problem = f"the source carries {si.role}, the input expects {di.role}"
     if problem:
         raise BuildError(f"cannot connect {src} ({si.describe()}) -> {dst} ({di.describe()}){_at(where)}: {problem}")

@@ -52,6 +52,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from snakesim.components.multibody.robot_model import JOINT_KINDS, RobotModel
 from snakesim.framework import Component, ContinuousState, Input, Output, Params, Uses
+from snakesim.components.port_roles import JOINT_EFFORTS, JOINT_POSITIONS, JOINT_VELOCITIES
 
 from .joint_selection import per_joint
 from .pid_kernel import pid_law
@@ -103,9 +104,9 @@ class JointPid(Component[JointPidParams]):
     setpoint = Input(shape=_nj, unit=None, names=_joints)
     rate_ref = Input(shape=_nj, unit="rad/s", default=0.0)
     tau_ff = Input(shape=_nj, unit="N*m", default=0.0)
-    q = Input(shape=_nj, unit="rad")
-    v = Input(shape=_nj, unit="rad/s")
-    tau = Output(shape=_nj, unit="N*m", feedthrough=True, names=_joints)
+    q = Input(shape=_nj, unit="rad", role=JOINT_POSITIONS)
+    v = Input(shape=_nj, unit="rad/s", role=JOINT_VELOCITIES)
+    tau = Output(shape=_nj, unit="N*m", feedthrough=True, names=_joints, role=JOINT_EFFORTS)
     error = Output(shape=_nj, unit=None, feedthrough=True, names=_joints)
 
     # -- set-up: one array per gain ---------------------------------------------------

@@ -60,6 +60,7 @@ from pydantic import Field
 from snakesim.framework import Component, ContinuousState, Input, Output, Provides
 
 from . import joint_values
+from ..port_roles import JOINT_POSITIONS, JOINT_VELOCITIES, JOINT_WRENCHES, LINK_POSES, LINK_VELOCITIES
 from .robot_model import RobotModel, RobotSource
 
 Vec3 = tuple[float, float, float]
@@ -111,15 +112,15 @@ class Multibody(Component[MultibodyParams]):
     v = Output(shape=lambda c: (c.robot.nv,), unit=None, feedthrough=(), calc="calc_state",
                names=lambda c: c.robot.v_names)
     joint_q = Output(shape=lambda c: (c.robot.nj,), unit="rad", feedthrough=(), calc="calc_state",
-                     names=lambda c: c.robot.joints)
+                     names=lambda c: c.robot.joints, role=JOINT_POSITIONS)
     joint_v = Output(shape=lambda c: (c.robot.nj,), unit="rad/s", feedthrough=(), calc="calc_state",
-                     names=lambda c: c.robot.joints)
+                     names=lambda c: c.robot.joints, role=JOINT_VELOCITIES)
     link_poses = Output(shape=lambda c: (c.robot.nl, 7), unit=None, feedthrough=(), calc="calc_state",
-                        names=_names(("x", "y", "z", "qx", "qy", "qz", "qw")))
+                        names=_names(("x", "y", "z", "qx", "qy", "qz", "qw")), role=LINK_POSES)
     link_rotations = Output(shape=lambda c: (c.robot.nl, 3, 3), unit="1", feedthrough=(), calc="calc_state",
                             names=_names(tuple(f"r{i}{j}" for i in range(3) for j in range(3))))
     link_velocities = Output(shape=lambda c: (c.robot.nl, 6), unit=None, feedthrough=(), calc="calc_state",
-                             names=_names(SIX))
+                             names=_names(SIX), role=LINK_VELOCITIES)
     # their own group: read by recorders and stop conditions, not by the derivatives' inputs, so
     # integrator stages (the continuous closure) skip them
     momentum = Output(shape=(6,), unit=None, feedthrough=(), calc="calc_momentum",
@@ -130,7 +131,7 @@ class Multibody(Component[MultibodyParams]):
     link_accelerations = Output(shape=lambda c: (c.robot.nl, 6), unit=None, feedthrough=True,
                                 names=_names(("ax", "ay", "az", "alphax", "alphay", "alphaz")))
     joint_wrenches = Output(shape=lambda c: (c.robot.nl, 6), unit=None, feedthrough=True,
-                            names=_names(("fx", "fy", "fz", "tx", "ty", "tz")))
+                            names=_names(("fx", "fy", "fz", "tx", "ty", "tz")), role=JOINT_WRENCHES)
 
     # -- set-up ------------------------------------------------------------------------
     def setup(self):

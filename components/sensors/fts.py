@@ -39,6 +39,7 @@ from pydantic import Field
 from snakesim.components.control.joint_selection import per_joint
 from snakesim.components.multibody.robot_model import RobotModel
 from snakesim.framework import Component, Input, Output, Params, Uses
+from snakesim.components.port_roles import JOINT_WRENCHES, SENSOR_WRENCHES
 
 from .noise import noise_needs_rate, white_noise
 
@@ -61,9 +62,9 @@ class ForceTorqueSensors(Component[FtsParams]):
     Params = FtsParams
     robot = Uses(RobotModel)
 
-    joint_wrenches = Input(shape=lambda c: (c.robot.nl, 6), unit=None)
+    joint_wrenches = Input(shape=lambda c: (c.robot.nl, 6), unit=None, role=JOINT_WRENCHES)
     wrench = Output(shape=lambda c: (len(c.sensor_names), 6), unit=None, feedthrough=True,
-                    names=lambda c: tuple(f"{s}.{a}" for s in c.sensor_names for a in AXES))
+                    names=lambda c: tuple(f"{s}.{a}" for s in c.sensor_names for a in AXES), role=SENSOR_WRENCHES)
 
     def setup(self):
         p, robot = self.p, self.robot

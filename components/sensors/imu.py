@@ -27,6 +27,7 @@ from pydantic import Field
 from snakesim.components.control.joint_selection import match
 from snakesim.components.multibody.robot_model import RobotModel
 from snakesim.framework import Component, Input, Output, Params, Uses
+from snakesim.components.port_roles import IMU_ANGULAR_RATE, IMU_ORIENTATION, IMU_SPECIFIC_FORCE
 
 from .noise import noise_needs_rate, white_noise
 
@@ -58,9 +59,9 @@ class Imu(Component[ImuParams]):
     link_velocities = Input(shape=_nl(6), unit=None)
     link_accelerations = Input(shape=_nl(6), unit=None)
     gravity = Input(shape=(1,), unit=None, default=np.nan)
-    angular_rate = Output(shape=(3,), unit="rad/s", feedthrough=True, names=("x", "y", "z"))
-    specific_force = Output(shape=(3,), unit="m/s**2", feedthrough=True, names=("x", "y", "z"))
-    orientation = Output(shape=(4,), unit="1", feedthrough=True, names=("qx", "qy", "qz", "qw"))
+    angular_rate = Output(shape=(3,), unit="rad/s", feedthrough=True, names=("x", "y", "z"), role=IMU_ANGULAR_RATE)
+    specific_force = Output(shape=(3,), unit="m/s**2", feedthrough=True, names=("x", "y", "z"), role=IMU_SPECIFIC_FORCE)
+    orientation = Output(shape=(4,), unit="1", feedthrough=True, names=("qx", "qy", "qz", "qw"), role=IMU_ORIENTATION)
 
     def setup(self):
         p = self.p

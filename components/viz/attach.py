@@ -5,8 +5,8 @@ Components are found by what their classes declare, never by their names or port
     robot      the component that provides the RobotModel resource (``Provides(RobotModel)``:
                the multibody or placed_multibody; with several, the first, named in the
                sink's ``uses: {robot: NAME}``). The sink uses that robot (its links and URDF
-               visuals), its numeric ``link_poses`` output is wired in and its name is the
-               robot's entity name (world/physical/<name>)
+               visuals), its output of role LINK_POSES (components/port_roles.py) is wired in
+               and its name is the robot's entity name (world/physical/<name>)
     terrain    the first structured output of type Terrain
     contacts   the first structured output of type ContactSet (any contact back end)
     attraction the first structured output of type AttractionSet (placement_settle's springs)
@@ -24,15 +24,16 @@ rates still share a short tick pattern.
 from __future__ import annotations
 
 import dataclasses
-import math
 
 from snakesim.framework.assembly import ComponentSpec, Resolved
+from snakesim.framework.rates import MAX_PHASES, lcm, nearest_period
 from snakesim.framework.signals import Structured
+
+from snakesim.components.port_roles import LINK_POSES
 
 from .target import VizTarget
 
 VIEWER_RATE_HZ = 30.0
-MAX_PHASES = 4096        # the scheduler's limit on distinct tick patterns (framework/plan.py)
 
 
 @dataclasses.dataclass
@@ -91,14 +92,11 @@ def _classes(resolved: Resolved, registry):
 def viewer_period(dt: float, rates, target_hz: float = VIEWER_RATE_HZ) -> int:
     """Base steps per viewer frame: nearest to 1/(target·dt) whose tick pattern with
     the other components' periods stays within the scheduler's limit."""
-    n0 = max(1, round(1.0 / (target_hz * dt)))
-    periods = [max(1, round(1.0 / (r * dt))) for r in rates if r]
+    n0 = nearest_period(target_hz, dt)
+    periods = [nearest_period(r, dt) for r in rates if r]
     best = None
     for n in sorted(range(max(1, n0 - 4), n0 + 5), key=lambda k: (abs(k - n0), k)):
-        lcm = n
-        for p in periods:
-            lcm = lcm * p // math.gcd(lcm, p)
-        if lcm <= MAX_PHASES:
+        if lcm([n, *periods]) <= MAX_PHASES:
             return n
         best = best or n
     return best
@@ -123,9 +121,9 @@ def attach_viewer(resolved: Resolved, target: VizTarget, registry=None, name: st
             found.robot = comp
             uses["robot"] = comp             # explicit: the scene may have several providers
             sink["robot_component"] = comp
-            poses = cls.outputs.get("link_poses")
-            if poses is not None and not isinstance(poses.signal, Structured):
-                conns.append((f"{comp}.link_poses", f"{name}.link_poses"))
+            poses = [p for p, out in cls.outputs.items() if out.role == LINK_POSES]
+            if poses:
+                conns.append((f"{comp}.{poses[0]}", f"{name}.link_poses"))
         for port, out in cls.outputs.items():
             sig = out.signal
             if not (isinstance(sig, Structured) and isinstance(sig.cls, type)):

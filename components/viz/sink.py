@@ -51,6 +51,7 @@ from snakesim.components.multibody.robot_model import RobotModel
 from snakesim.components.placement import AttractionSet
 from snakesim.components.terrain import Terrain
 from snakesim.framework import Component, Input, Params, Uses
+from snakesim.components.port_roles import LINK_POSES
 
 from . import entities as E
 from .robot_geometry import link_meshes
@@ -114,7 +115,7 @@ class RerunSink(Component[RerunSinkParams]):
     robot = Uses(RobotModel, required=False, doc="the robot drawn: link rows and URDF visuals")
 
     link_poses = Input(shape=lambda c: (len(c.links), 7), unit=None, default=0.0,
-                       doc="[x, y, z, qx, qy, qz, qw] per link, world")
+                       doc="[x, y, z, qx, qy, qz, qw] per link, world", role=LINK_POSES)
     terrain = Input(type=Terrain, required=False, doc="drawn once, static")
     contacts = Input(type=ContactSet, required=False, doc="contact points and forces, any contact back end")
     tethers = Input(type=object, required=False, doc="anything with strips/points polylines")

@@ -1,4 +1,5 @@
-"""Build-time resources (``Uses``/``Provides``), the framework-owned per-run cache and the frozen plan.
+"""Build-time resources (``Uses``/``Provides``), the framework-owned per-run cache, the frozen plan
+and port roles.
 
 A resource is built once by its provider and handed to every user before its
 ``setup()``, so port shapes follow it; the binding is by kind when one
@@ -88,6 +89,26 @@ class Watcher(Component[Params]):
         pass
 
 
+class Angles(Component[Params]):
+    """A position and a rate output, each with its role."""
+
+    type_name = "test_angles"
+    q = Output(unit="rad", feedthrough=(), role="joint_positions")
+    v = Output(unit="rad", feedthrough=(), role="joint_velocities")   # same unit on purpose: only the role differs
+
+    def output(self, t, x, u, y):
+        y.q[...], y.v[...] = 1.0, 2.0
+
+
+class Servo(Component[Params]):
+    type_name = "test_servo"
+    q = Input(unit="rad", role="joint_positions")
+    tau = Output(unit="N*m", feedthrough=True)
+
+    def output(self, t, x, u, y):
+        y.tau[...] = -u.q
+
+
 class Broken(Component[Params]):
     """Declares a resource and forgets to build it."""
 
@@ -98,7 +119,7 @@ class Broken(Component[Params]):
 @pytest.fixture(scope="module")
 def reg():
     r = build_registry(load_entry_points=False)
-    for cls in (Bank, Scaler, Watcher, Broken):
+    for cls in (Bank, Scaler, Watcher, Broken, Angles, Servo):
         r.add_component(cls)
     return r
 
@@ -195,3 +216,14 @@ def test_the_plan_is_frozen_and_a_run_leaves_it_as_built(scene):
     s.run()
     for name, value in fields.items():
         assert getattr(plan, name) is value, name
+
+
+def test_ports_with_declared_roles_connect_only_to_the_same_role(scene):
+    """A role says what a port carries: rates wired into a position input fail at build, naming both."""
+    ok = scene("components:\n  a: {type: test_angles}\n  s: {type: test_servo}\n"
+               "connections: [a.q -> s.q]\nrecord: [s.tau]\n")
+    assert ok.run()["s.tau"][-1] == -1.0
+    with pytest.raises(Exception, match=r"cannot connect a.v .* -> s.q .*carries joint_velocities, the input "
+                                        r"expects joint_positions"):
+        scene("components:\n  a: {type: test_angles}\n  s: {type: test_servo}\n"
+              "connections: [a.v -> s.q]\nrecord: [s.tau]\n")
