@@ -139,6 +139,9 @@ def collect(session) -> tuple[dict[str, Box], list[Link], str]:
             c, p = _split(spec.signal)
             stopped[c].append(p)
 
+    # build-time resources: who provides what, and which provider each user was handed
+    providers = {id(getattr(c, slot)): (n, slot) for n, c in plan.components.items() for slot in type(c).provides}
+
     boxes, classes = {}, {}
     for i, name in enumerate(names):
         comp = plan.components.get(name)
@@ -178,6 +181,13 @@ def collect(session) -> tuple[dict[str, Box], list[Link], str]:
         if name in pruned:
             facts.append("pruned")
         info = ["  ·  ".join(facts)] if facts else []
+        if comp is not None:
+            for slot in type(comp).provides:
+                info.append(f"provides {slot}")
+            for slot in type(comp).uses:
+                prov = providers.get(id(getattr(comp, slot, None)))
+                if prov is not None:
+                    info.append(f"uses {slot}" + ("" if prov[0] == slot else f" ← {prov[0]}"))
         if recorded.get(name):
             info.append("rec: " + ", ".join(recorded[name]))
         if stopped.get(name):

@@ -99,3 +99,11 @@ def test_cli_writes_svg_and_png(tmp_path, monkeypatch):
     assert (tmp_path / "c.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     result = CliRunner().invoke(cli, ["graph", "pendulum", "-o", "d.pdf"])
     assert result.exit_code != 0 and ".svg or .png" in result.output
+
+
+def test_boxes_say_which_component_provides_the_robot_and_who_uses_it():
+    """The robot is a resource, not an arrow: the provider's box says so, and each user's box names it."""
+    lay = layout(load_session("contact-screw-drive", overrides=["robot.modules=2"]))
+    assert "provides robot" in lay.boxes["robot"].info
+    users = [n for n, b in lay.boxes.items() if "uses robot" in b.info]
+    assert set(users) == {"contact", "drive"}
