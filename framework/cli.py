@@ -120,6 +120,12 @@ def check(assembly, config, sets, as_json, **shorthands):
         rate = f"{c['rate_hz']:g} Hz" if c["rate_hz"] else "continuous"
         click.echo(f"  {n:<28} {c['type']:<22} {rate:<12} x={c['continuous_states']} xd={c['discrete_states']}")
     click.echo(f"pruned (outputs reach no state, recorder or sink): {', '.join(r['pruned']) or 'none'}")
+    users: dict[str, list[str]] = {}
+    for n, slots in r.get("resources", {}).items():
+        for slot, provider in slots.items():
+            users.setdefault(f"{provider}.{slot}", []).append(n)
+    for res, names in users.items():
+        click.echo(f"resource {res} used by: {', '.join(names)}")
     st = r["state_size"]
     click.echo(f"state: {st['continuous']} continuous ({st['tangent']} tangent), {st['discrete']} discrete; "
                f"dt = {r['dt']:g} s, integrator {r['integrator']}")

@@ -148,8 +148,9 @@ class Plan:
 
 # -- helpers ---------------------------------------------------------------------
 
-def _instantiate(resolved: Resolved, registry) -> dict[str, Component]:
-    """Components in definition order; built providers-first so each is handed the resources it uses."""
+def _instantiate(resolved: Resolved, registry) -> tuple[dict[str, Component], dict]:
+    """Components in definition order, built providers-first so each is handed the resources it uses;
+    and the bindings ({user: {slot: provider}})."""
     classes = {}
     for name, spec in resolved.components.items():
         try:
@@ -177,7 +178,8 @@ def _instantiate(resolved: Resolved, registry) -> dict[str, Component]:
             raise ConfigError(msg, where, f"components.{name}.params.{loc}") from None
         except (ValueError, TypeError) as e:
             raise ConfigError(str(e), where, f"components.{name}") from None
-    return {n: built[n] for n in resolved.components}
+    bound = {n: {slot: b[0] for slot, b in slots.items() if b is not None} for n, slots in binding.items()}
+    return {n: built[n] for n in resolved.components}, {n: b for n, b in bound.items() if b}
 
 
 def _cycle(nodes: list[Node], edges: dict[int, list[tuple[int, PortRef, PortRef]]]) -> str:
@@ -462,7 +464,7 @@ def _major_lists(calls, n_phases, used) -> tuple[tuple[tuple, ...], ...]:
 def build(resolved: Resolved, registry) -> Plan:
     """Everything a run needs, decided once: the returned plan is never changed afterwards."""
     dt = resolved.sim.dt
-    comps = _instantiate(resolved, registry)
+    comps, resources = _instantiate(resolved, registry)
     infos = {name: port_infos(c) for name, c in comps.items()}
     sources = _wire(resolved.connections, comps, infos)
     recorded = [parse_ref(r, comps, "output", w) for r, w in resolved.record]
@@ -520,6 +522,7 @@ def build(resolved: Resolved, registry) -> Plan:
                            "discrete_states": int(xd_of[n].size) if n in xd_of else 0}
                        for n, c in comps.items()},
         "pruned": pruned,
+        "resources": {n: b for n, b in resources.items() if n in comps},
         "state_size": {"continuous": int(X.size), "tangent": int(DX.size), "discrete": int(XD.size)},
         "evaluation_order": [nodes[i].label() for i in order],
         "unread_outputs": sorted(f"{n}.{p}" for n, c in comps.items() for p in c.outputs if PortRef(n, p) not in used),

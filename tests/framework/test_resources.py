@@ -139,6 +139,7 @@ def test_users_get_the_providers_object_and_shapes_follow_it(scene):
               "connections: [bank.level -> scale.u]\nrecord: [scale.y, watch.n]\n")
     bank, scale = s.plan.components["bank"], s.plan.components["scale"]
     assert scale.gains is bank.gains                     # one object, built once
+    assert s.report()["resources"] == {"scale": {"gains": "bank"}, "watch": {"gains": "bank"}}
     assert s.plan.infos["scale"]["y"].shape == (2,)
     r = s.run()
     np.testing.assert_array_equal(r["scale.y"][-1], [4.0, 1.0])
