@@ -20,6 +20,8 @@ def component_reference(registry) -> dict:
         for pname, f in cls.Params.model_fields.items():
             # required parameters have no default: say so (and keep the reference JSON-clean)
             default = "(required)" if f.is_required() else f.get_default(call_default_factory=True)
+            if hasattr(default, "model_dump"):      # a nested parameter model (e.g. a Material)
+                default = default.model_dump(mode="json")
             params.append({"name": pname, "type": getattr(f.annotation, "__name__", str(f.annotation)),
                            "default": default, "description": f.description or ""})
         out[name] = {

@@ -7,7 +7,8 @@ that contact scenes use lives in control (``screw_drive``)."""
 from .kernels import (anisotropic_friction, contact_forces, ev_magnitude, isotropic_friction, normal_force,
                       slip_direction, tangent_axis, tangential_velocity)
 from .kernels_numba import body_wrenches_nb, contact_forces_nb, contact_forces_numba
-from .materials import FrictionMaterial
+from snakesim.components.materials import Material, MaterialPatch, material_table   # the one material schema
+
 from .point_contact import PointContact, PointContactParams
 from .screw_samples import ScrewContactSamples, body_wrench, body_wrenches, thread_direction
 from .steady_state import steady_axial_speed
@@ -17,6 +18,6 @@ from .screw_sdf import ScrewSdfContact, ScrewSdfContactParams
 
 __all__ = ["anisotropic_friction", "contact_forces", "ev_magnitude", "isotropic_friction", "normal_force",
            "slip_direction", "tangent_axis", "tangential_velocity", "contact_forces_nb", "contact_forces_numba",
-           "body_wrenches_nb", "FrictionMaterial", "PointContact", "PointContactParams", "ScrewContactSamples", "body_wrench", "body_wrenches",
+           "body_wrenches_nb", "Material", "MaterialPatch", "material_table", "PointContact", "PointContactParams", "ScrewContactSamples", "body_wrench", "body_wrenches",
            "thread_direction", "steady_axial_speed", "ContactSet", "RobotScrewError", "ScrewLayout", "screw_layout",
            "ScrewSdfContact", "ScrewSdfContactParams"]

@@ -12,17 +12,24 @@ are ignored.
 Standard errors: se(μ) = std/√n_par; se(a), se(b) from the ordinary least squares
 covariance σ̂² (XᵀX)⁻¹ with σ̂² = RSS/(n_norm − 2) (the uncertainty of μ is not propagated
 into a, b; it scales them by a common factor).
+
+The result is a materials file (:func:`material_file`, snakesim.components.materials): one
+Material with the fitted μ, ev_a, ev_b and a penalty k, c that the drag tests do not
+measure (given, or taken from a base material; the file says which), which a terrain YAML
+includes as it is: ``materials: [{include: FILE}]``.
 """
 
 from __future__ import annotations
 
 import csv
 import dataclasses
+import json
 import math
 from pathlib import Path
 
 import numpy as np
 
+from snakesim.components.materials import Material
 from snakesim.framework import SnakesimError
 
 COLUMNS = ("normal_force", "direction", "drag_force")
@@ -65,8 +72,10 @@ class FrictionFit:
     def ev_residuals(self):
         return self.ev - (self.ev_a + self.ev_b * self.fn_norm)
 
-    def material(self) -> dict:
-        return {"mu": float(self.mu), "ev_a": float(self.ev_a), "ev_b": float(self.ev_b)}
+    def material(self, name: str, k: float, c: float) -> Material:
+        """The fitted material: μ, ev_a, ev_b from the fit; k and c given (drag tests do not
+        measure them). Raises ValueError (pydantic's) if a value is out of range."""
+        return Material(name=name, k=k, c=c, mu=float(self.mu), ev_a=float(self.ev_a), ev_b=float(self.ev_b))
 
 
 def read_drag_tests(path) -> DragTests:
@@ -160,17 +169,39 @@ def format_fit(fit: FrictionFit, data: DragTests) -> str:
     ev_lo, ev_hi = fit.ev_a + fit.ev_b * lo, fit.ev_a + fit.ev_b * hi
     out.append(f"  ‖e_v‖ over the tested range [{lo:g}, {hi:g}] N: {ev_lo:.4g} .. {ev_hi:.4g}")
     if min(ev_lo, ev_hi, fit.ev_a) <= 0:
-        out.append("  WARNING: the fit gives ‖e_v‖ ≤ 0 on [0, max tested F_n]; FrictionMaterial will reject it "
-                   "unless fn_max is lowered")
+        out.append("  WARNING: the fit gives ‖e_v‖ ≤ 0 on [0, max tested F_n]; contact components reject it "
+                   "unless their fn_max is lowered")
     return "\n".join(out)
 
 
-def material_yaml(fit: FrictionFit, name: str, source: str) -> str:
-    """A ``materials:`` config snippet (hand-written YAML: stable key order, full precision)."""
-    m = fit.material()
-    return (f"# fitted by `snakesim fit-friction {source}` (paper fig. 6 procedure)\n"
-            f"materials:\n  {name}:\n"
-            f"    mu: {m['mu']!r}\n    ev_a: {m['ev_a']!r}\n    ev_b: {m['ev_b']!r}  # 1/N\n")
+def _yaml_float(x: float) -> str:
+    """Full-precision float that every YAML reader reads as a float (YAML 1.1 needs a '.' in 1e-05)."""
+    r = repr(float(x))
+    mant, e, exp = r.partition("e")
+    return f"{mant}.0e{exp}" if e and "." not in mant else r
+
+
+def material_file(material: Material, fit: FrictionFit, source: str, k_from: str, c_from: str,
+                  file_name: str = "FILE.yaml") -> str:
+    """A materials file (snakesim.components.materials.read_material_file reads it) holding the
+    fitted material; comments say what was fitted and where k and c came from. Hand-written
+    YAML: stable key order, full precision."""
+    m = material
+    lo, hi = fit.fn_norm.min(), fit.fn_norm.max()
+    return (f"# materials file written by `snakesim fit-friction {source}` (paper fig. 6 procedure).\n"
+            f"# A terrain YAML includes it as it is (path relative to the terrain file):\n"
+            f"#   materials:\n#     - {{include: {file_name}}}\n"
+            f"# mu, ev_a, ev_b: fitted (standard errors {fit.se_mu:.2g}, {fit.se_a:.2g}, {fit.se_b:.2g} 1/N), "
+            f"normal-direction tests at {lo:g} .. {hi:g} N\n"
+            f"# k: not measured by the drag tests; {k_from}\n"
+            f"# c: not measured by the drag tests; {c_from}\n"
+            f"materials:\n"
+            f"  - name: {json.dumps(m.name)}\n"
+            f"    k: {_yaml_float(m.k)}    # N/m\n"
+            f"    c: {_yaml_float(m.c)}    # N·s/m\n"
+            f"    mu: {_yaml_float(m.mu)}\n"
+            f"    ev_a: {_yaml_float(m.ev_a)}\n"
+            f"    ev_b: {_yaml_float(m.ev_b)}    # 1/N\n")
 
 
 def plot_fit(fit: FrictionFit, path) -> None:

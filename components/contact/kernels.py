@@ -40,11 +40,11 @@ v_ε = 0 both modes are the paper's exact laws (s = 0 at v_t = 0).
 Isotropic (eq. 1):    F_t = −F_n μ s
 Anisotropic (eq. 6):  F_t = −F_n μ (s + (‖e_v‖ − 1)(s·ê_v) ê_v),   ‖e_v‖ = a + b F_n
 
-‖e_v‖ ≤ 0 would reverse the friction along ê_v (an energy source). FrictionMaterial
-(materials.py) rejects a, b for which a + b F_n < ev_floor anywhere on [0, fn_max]; the
-kernels additionally clamp ‖e_v‖ at ev_floor so an out-of-range load (an impact) cannot
-produce an energy source. If ê_v has no tangential component (< 1e-12) the point is
-treated as isotropic.
+‖e_v‖ ≤ 0 would reverse the friction along ê_v (an energy source). Every contact component
+rejects materials (snakesim.components.materials) whose a + b F_n < ev_floor anywhere on
+its [0, fn_max]; the kernels additionally clamp ‖e_v‖ at ev_floor so an out-of-range load
+(an impact) cannot produce an energy source. If ê_v has no tangential component (< 1e-12)
+the point is treated as isotropic.
 
 Each function has a numba twin in kernels_numba.py that agrees to 1e-12.
 """

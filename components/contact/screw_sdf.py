@@ -30,9 +30,11 @@ sqrt(r² + (L/2)²) + margin) against ``terrain.distance_lower_bound``; only scr
 bound is ≤ 0 are sampled and queried, so a robot far from every surface costs one
 sphere query per screw.
 
-Material: the terrain's per-sample material (k, c, μ, ev_a, ev_b); any field of
-``material`` overrides it for every terrain material. v_ε, the regularisation mode and
-ev_floor are this component's.
+Material: the terrain's per-sample material (snakesim.components.materials.Material: k, c,
+μ, ev_a, ev_b); any field of ``material`` (a MaterialPatch) overrides it for every terrain
+material. The table the kernels read is packed once per terrain object (material_table),
+which checks ‖e_v‖ ≥ ev_floor over [0, fn_max]. v_ε, the regularisation mode, ev_floor
+and fn_max are this component's.
 
 uses robot: RobotModel      (the multibody's; its screws: robot_screws.py)
 in   link_poses[nl,7]       multibody link_poses (xyz + quaternion xyzw, world)
@@ -58,6 +60,7 @@ import numpy as np
 from pydantic import Field
 
 from snakesim.framework import Component, Input, Output, Params, Uses
+from snakesim.components.materials import MaterialPatch, material_table
 from snakesim.components.multibody.robot_model import RobotModel
 
 from ..terrain.analytic import PlaneTerrain
@@ -69,27 +72,12 @@ from .screw_samples import ScrewContactSamples
 from .sdf_kernels import contact_wrenches, plane_contact_step, sample_points, screw_centres
 
 
-class MaterialOverride(Params):
-    """Replaces the terrain material's value where given (for every terrain material)."""
-
-    k: float | None = Field(None, gt=0, description="N/m, penalty stiffness (eq. 2)")
-    c: float | None = Field(None, ge=0, description="N·s/m, penalty damping (eq. 2)")
-    mu: float | None = Field(None, ge=0, description="friction coefficient")
-    ev_a: float | None = Field(None, description="‖e_v‖ at zero normal force")
-    ev_b: float | None = Field(None, description="1/N, d‖e_v‖/dF_n")
-
-    def table(self, materials) -> np.ndarray:
-        """[k, c, mu, ev_a, ev_b] per terrain material, with this override applied."""
-        own = (self.k, self.c, self.mu, self.ev_a, self.ev_b)
-        return np.array([[v if o is None else o for v, o in zip((m.k, m.c, m.mu, m.ev_a, m.ev_b), own)]
-                         for m in materials], dtype=np.float64)
-
-
 class ScrewSdfContactParams(Params):
     rings: int = Field(3, ge=1, description="rings of samples per screw, spread over its length")
     per_ring: int = Field(8, ge=1, description="samples per ring, evenly around the envelope")
     phase: float = Field(0.0, description="rad, rotates every ring about its axis (φ = 3π/2 is the joint frame's −z)")
-    material: MaterialOverride | None = None
+    material: MaterialPatch | None = Field(None, description="overrides the terrain materials' k, c, mu, ev_a, ev_b")
+    fn_max: float = Field(500.0, gt=0, description="N, top of the normal load per sample: ‖e_v‖ ≥ ev_floor up to it")
     v_eps: float = Field(1e-3, ge=0, description="m/s, slip regularisation width")
     regularisation: Literal["sqrt", "linear"] = "sqrt"
     ev_floor: float = Field(EV_FLOOR, gt=0, description="smallest admissible ‖e_v‖")
@@ -159,7 +147,9 @@ class ScrewSdfContact(Component[ScrewSdfContactParams]):
 
     def _material_table(self, terrain: Terrain) -> np.ndarray:
         if terrain is not self._terrain:
-            self._terrain, self._mats = terrain, (self.p.material or MaterialOverride()).table(terrain.materials)
+            p = self.p
+            self._terrain, self._mats = terrain, material_table(terrain.materials, p.material, fn_max=p.fn_max,
+                                                                ev_floor=p.ev_floor, owner=self.name)
             self._plane_call = None
             # planes are queried in numba (no allocation); every other kind through Terrain.query
             self._plane = None

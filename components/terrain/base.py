@@ -4,7 +4,7 @@
     q.distance  (n,)   m   signed, > 0 outside the solid (in free space), < 0 = penetration
     q.normal    (n, 3)     unit, pointing out of the solid (towards free space)
     q.closest   (n, 3) m   closest surface point, = points - distance * normal
-    q.material  (n,)       index into terrain.materials (per region)
+    q.material  (n,)       index into terrain.materials (per region; Material: snakesim.components.materials)
 
 Analytic kinds are exact where the geometry allows (plane, walls, smooth tube,
 U-channel); rough surfaces and height fields use a first-order distance
@@ -17,23 +17,7 @@ import dataclasses
 
 import numpy as np
 
-
-@dataclasses.dataclass(frozen=True)
-class Material:
-    """Contact parameters of one terrain region (used by the contact model).
-
-    k      contact stiffness, N/m           (paper eq. 2)
-    c      contact damping, N·s/m           (paper eq. 2)
-    mu     friction coefficient             (paper eq. 1, 6)
-    ev_a, ev_b   anisotropy fit ||e_v|| = ev_a + ev_b·F_n (F_n in N); ev_a=1, ev_b=0 is isotropic
-    """
-
-    name: str = "ice"
-    k: float = 1.0e5
-    c: float = 1.0e3
-    mu: float = 0.3
-    ev_a: float = 1.0
-    ev_b: float = 0.0
+from snakesim.components.materials import Material   # re-exported: the terrain's materials are these
 
 
 @dataclasses.dataclass(frozen=True)

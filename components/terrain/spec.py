@@ -5,9 +5,14 @@
     materials:                 # first one is the default of every region
       - {name: ice, k: 2.0e5, c: 500, mu: 0.1}
       - {name: rock, k: 1.0e6, c: 2000, mu: 0.6}
+      - {include: hard-ice.yaml}   # the materials of a materials file, here
     regions: {floor: rock}     # region -> material name (regions per kind: see each class)
 
-Files named in a definition (DEM grids, meshes) are relative to the YAML file.
+Materials are snakesim.components.materials.Material (k N/m, c N·s/m, mu, ev_a, ev_b 1/N).
+A materials file (what ``snakesim fit-friction --out`` writes) has one key, ``materials:``,
+a list in the same form; ``{include: FILE}`` puts its materials where the entry stands.
+
+Files named in a definition (DEM grids, meshes, material files) are relative to the YAML file.
 """
 
 from __future__ import annotations
@@ -19,11 +24,12 @@ from typing import Annotated, Literal, Union
 
 from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError, model_validator
 
+from snakesim.components.materials import Material, material_from_mapping, read_material_file
 from snakesim.framework import ConfigError
 from snakesim.framework.yaml_source import load_yaml
 
 from . import analytic, dem, mesh
-from .base import Material, Terrain
+from .base import Terrain
 
 Vec3 = tuple[float, float, float]
 
@@ -32,18 +38,11 @@ class _Model(BaseModel):
     model_config = ConfigDict(frozen=True, extra="forbid")
 
 
-class MaterialSpec(_Model):
-    name: str = "ice"
-    k: float = Field(1.0e5, gt=0, description="contact stiffness, N/m")
-    c: float = Field(1.0e3, ge=0, description="contact damping, N·s/m")
-    mu: float = Field(0.3, ge=0, description="friction coefficient")
-    ev_a: float = Field(1.0, description="||e_v|| = ev_a + ev_b·F_n")
-    ev_b: float = Field(0.0, description="1/N")
-
-
 class _Base(_Model):
     description: str = ""
-    materials: list[MaterialSpec] = Field(default_factory=lambda: [MaterialSpec()], min_length=1)
+    materials: list[Material] = Field(default_factory=lambda: [Material()], min_length=1,
+                                      description="first = default of every region; {include: FILE} entries "
+                                                  "are expanded before validation")
     regions: dict[str, str] = Field(default_factory=dict, description="region -> material name")
 
     @model_validator(mode="after")
@@ -51,7 +50,8 @@ class _Base(_Model):
         names = [m.name for m in self.materials]
         dup = {n for n in names if names.count(n) > 1}
         if dup:
-            raise ValueError(f"duplicate material name(s) {sorted(dup)}")
+            raise ValueError(f"duplicate material name(s) {sorted(dup)}: names are unique across the "
+                             f"terrain's own and its included materials")
         return self
 
 
@@ -175,32 +175,78 @@ def _where(data, loc) -> str | None:
     return best
 
 
-def validate_spec(data, source: str = "<terrain>"):
-    """dict -> spec model; errors name the file:line and the key."""
+def _message(err: dict) -> str:
+    msg = err["msg"]
+    if err["type"] == "value_error":
+        return msg.removeprefix("Value error, ")
+    if "input" in err and not isinstance(err["input"], (dict, list)):
+        return f"{msg} (got {err['input']!r})"
+    return msg
+
+
+def _unknown_key(key, valid) -> str:
+    close = difflib.get_close_matches(str(key), list(valid), n=1)
+    return f"unknown key '{key}'" + (f"; did you mean '{close[0]}'?" if close else "") + f" valid keys: {', '.join(valid)}"
+
+
+def validate_spec(data, source: str = "<terrain>", base_dir: Path | None = None):
+    """dict -> spec model; errors name the file:line and the key. ``{include: FILE}`` entries of
+    ``materials`` are read relative to ``base_dir`` (default: the current folder)."""
     if not isinstance(data, dict):
         raise ConfigError(f"a terrain definition is a mapping with a 'kind' key, got {type(data).__name__}", source)
+    data_in = data
+    data = _expand_materials(data, Path(".") if base_dir is None else Path(base_dir), source)
     try:
         return _ADAPTER.validate_python(dict(data))
     except ValidationError as e:
         errs = e.errors()
         err = next((x for x in errs if x["type"] == "extra_forbidden"), errs[0])   # a typo explains 'missing'
         loc = [x for x in err["loc"] if not (isinstance(x, str) and x == data.get("kind"))]
-        msg = err["msg"]
+        msg = _message(err)
         if err["type"] == "extra_forbidden":
             model = {c.model_fields["kind"].annotation.__args__[0]: c for c in
                      (PlaneSpec, TubeSpec, WallsSpec, UChannelSpec, MoulinSpec, DemSpec, MeshSpec)}.get(data.get("kind"))
-            valid = ""
+            msg = f"unknown key '{loc[-1]}'"
             if model is not None and len(loc) == 1:
-                close = difflib.get_close_matches(str(loc[-1]), list(model.model_fields), n=1)
-                valid = (f"; did you mean '{close[0]}'?" if close else "") + f" valid keys: {', '.join(model.model_fields)}"
-            msg = f"unknown key '{loc[-1]}'{valid}"
-        elif "input" in err and not isinstance(err["input"], (dict, list)):
-            msg = f"{msg} (got {err['input']!r})"
-        raise ConfigError(msg, _where(data, loc) or source, ".".join(str(x) for x in loc) or None) from None
+                msg = _unknown_key(loc[-1], model.model_fields)
+        raise ConfigError(msg, _where(data_in, loc) or source, ".".join(str(x) for x in loc) or None) from None
+
+
+# -- materials: inline entries and {include: FILE} ------------------------------------
+
+def _expand_materials(data, base_dir: Path, source: str):
+    """``data`` with every ``materials`` entry a Material (inline ones validated, includes read)."""
+    items = data.get("materials")
+    if not isinstance(items, list):
+        return data            # absent (default) or malformed: the schema reports it
+    where = data.where("materials") if hasattr(data, "where") else None
+    where = where or source
+    mats = []
+    for i, entry in enumerate(items):
+        at = (items.where(i) if hasattr(items, "where") else None) or where
+        if isinstance(entry, dict) and "include" in entry:
+            key = f"materials.{i}.include"
+            extra = [k for k in entry if k != "include"]
+            if extra:
+                raise ConfigError(f"an include entry has the one key 'include', got also {', '.join(map(str, extra))}",
+                                  at, key)
+            ref = entry["include"]
+            if not isinstance(ref, str) or not ref:
+                raise ConfigError(f"'include' names a materials file (a path relative to the terrain file), got {ref!r}",
+                                  at, key)
+            path = base_dir / Path(ref).expanduser()
+            if not path.is_file():
+                raise ConfigError(f"materials file '{ref}' not found (looked for {path.resolve()})", at, key)
+            mats.extend(read_material_file(path, included_from=at))
+        else:
+            mats.append(material_from_mapping(entry, at, f"materials.{i}"))
+    out = type(data)(data) if isinstance(data, dict) else dict(data)
+    out["materials"] = mats
+    return out
 
 
 def _materials(spec, cls, source):
-    mats = tuple(Material(**m.model_dump()) for m in spec.materials)
+    mats = tuple(spec.materials)
     names = [m.name for m in mats]
     rm = [0] * len(cls.regions)
     for region, mat in spec.regions.items():
@@ -216,7 +262,7 @@ def _materials(spec, cls, source):
 def build_terrain(spec, base_dir: Path = Path("."), source: str = "<terrain>", name: str = "", store=None) -> Terrain:
     """Spec model (or plain dict) -> Terrain."""
     if isinstance(spec, dict):
-        spec = validate_spec(spec, source)
+        spec = validate_spec(spec, source, base_dir)
     kw = _materials(spec, _CLASSES[spec.kind], source)
     kw["name"] = name or spec.kind
     try:
@@ -286,6 +332,15 @@ def resolve_terrain(ref: str) -> Path:
                       f"(available: {', '.join(names) or 'none'}).{hint}")
 
 
+def terrain_materials(ref: str) -> tuple[Material, ...]:
+    """The materials of a terrain (name in terrains/ or path), read and validated without
+    building its geometry; an imported mesh has the default material."""
+    path = resolve_terrain(ref)
+    if path.suffix.lower() in mesh.MESH_SUFFIXES:
+        return (Material(),)
+    return tuple(validate_spec(load_yaml(path), str(path), path.parent).materials)
+
+
 def load_terrain(ref: str | dict, store=None) -> Terrain:
     """Terrain from a name in terrains/, a path (YAML definition or OBJ/STL/PLY mesh) or an inline dict."""
     if isinstance(ref, dict):
@@ -294,5 +349,5 @@ def load_terrain(ref: str | dict, store=None) -> Terrain:
     if path.suffix.lower() in mesh.MESH_SUFFIXES:
         return mesh.mesh_terrain(path, store=store, name=path.stem)
     data = load_yaml(path)
-    spec = validate_spec(data, str(path))
+    spec = validate_spec(data, str(path), path.parent)
     return build_terrain(spec, path.parent, str(path), name=path.stem, store=store)

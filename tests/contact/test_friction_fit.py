@@ -5,7 +5,8 @@ import pytest
 import yaml
 from click.testing import CliRunner
 
-from snakesim.components.contact.friction_fit import FrictionDataError, fit_friction, read_drag_tests
+from snakesim.components.contact.friction_fit import FrictionDataError, _yaml_float, fit_friction, read_drag_tests
+from snakesim.components.materials import Material, read_material_file
 from snakesim.components.contact.friction_fit_cli import fit_friction as fit_cmd, snakesim_add_commands
 
 HEADER = "normal_force,direction,drag_force\n"
@@ -75,17 +76,49 @@ def test_missing_file_error(tmp_path):
     assert res.exit_code != 0 and "nope.csv" in res.output
 
 
-def test_cli_writes_snippet_and_plot(tmp_path):
+def test_cli_writes_material_file_and_plot(tmp_path):
     data = write(tmp_path, synth(0.25, 1.8, 0.025), name="hard-ice-drag-tests.csv")
     out, png = tmp_path / "mat.yaml", tmp_path / "fit.png"
-    res = CliRunner().invoke(fit_cmd, [str(data), "--out", str(out), "--plot", str(png)])
+    res = CliRunner().invoke(fit_cmd, [str(data), "--out", str(out), "--plot", str(png), "--k", "2e5", "--c", "500"])
     assert res.exit_code == 0, res.output
     assert "mu   = 0.25" in res.output and "residuals" in res.output
-    snippet = yaml.safe_load(out.read_text())
-    assert set(snippet["materials"]) == {"hard_ice"}
-    m = snippet["materials"]["hard_ice"]
-    assert m["mu"] == pytest.approx(0.25) and m["ev_a"] == pytest.approx(1.8) and m["ev_b"] == pytest.approx(0.025)
+    text = out.read_text()
+    assert "# k: not measured by the drag tests; given with --k" in text
+    assert "# c: not measured by the drag tests; given with --c" in text
+    assert "{include: mat.yaml}" in text
+    raw = yaml.safe_load(text)          # plain YAML too, every number a float
+    assert [m["name"] for m in raw["materials"]] == ["hard_ice"]
+    (m,) = read_material_file(out)
+    assert (m.name, m.k, m.c) == ("hard_ice", 2e5, 500.0)
+    assert m.mu == pytest.approx(0.25, rel=1e-13) and m.ev_a == pytest.approx(1.8, rel=1e-12)
+    assert m.ev_b == pytest.approx(0.025, rel=1e-12)
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_k_and_c_from_a_base_material_or_the_defaults(tmp_path):
+    data = write(tmp_path, synth(0.25, 1.8, 0.025), name="ice-drag-tests.csv")
+    out = tmp_path / "ice.yaml"
+    res = CliRunner().invoke(fit_cmd, [str(data), "--out", str(out), "--base", "u-channel:dirty-ice", "--c", "7"])
+    assert res.exit_code == 0, res.output
+    (m,) = read_material_file(out)
+    assert (m.name, m.k, m.c) == ("ice", 1.5e5, 7.0)                   # u-channel's dirty-ice k, --c
+    assert "# k: not measured by the drag tests; from material 'dirty-ice' of terrain u-channel (--base)" in out.read_text()
+    res = CliRunner().invoke(fit_cmd, [str(data), "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    (m,) = read_material_file(out)
+    assert (m.k, m.c) == (Material().k, Material().c)
+    assert "snakesim's default Material value" in out.read_text()
+    res = CliRunner().invoke(fit_cmd, [str(data), "--out", str(out), "--base", "u-channel:granite"])
+    assert res.exit_code != 0 and "no material 'granite'" in res.output and "ice, dirty-ice" in res.output
+    res = CliRunner().invoke(fit_cmd, [str(data), "--out", str(out), "--k", "-3"])
+    assert res.exit_code != 0 and "Traceback" not in res.output
+    assert "material 'ice': k = -3 N/m must be > 0" in res.output
+
+
+def test_small_numbers_stay_floats_in_plain_yaml():
+    assert _yaml_float(1e-05) == "1.0e-05" and yaml.safe_load(_yaml_float(1e-05)) == 1e-05
+    assert _yaml_float(2.5e-05) == "2.5e-05" and _yaml_float(0.25) == "0.25" and _yaml_float(-1e20) == "-1.0e+20"
+    assert yaml.safe_load(_yaml_float(-1e20)) == -1e20
 
 
 def test_hook_adds_command():

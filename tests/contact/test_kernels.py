@@ -4,8 +4,10 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from snakesim.components.contact import (FrictionMaterial, anisotropic_friction, contact_forces, contact_forces_numba,
-                                         isotropic_friction, normal_force, slip_direction, tangential_velocity)
+from snakesim.components.contact import (PointContactParams, anisotropic_friction, contact_forces,
+                                         contact_forces_numba, isotropic_friction, normal_force, slip_direction,
+                                         tangential_velocity)
+from snakesim.components.materials import Material
 
 Z = np.array([[0.0, 0.0, 1.0]])
 
@@ -106,11 +108,11 @@ def test_creep_speed_bound_on_slope(theta):
 
 
 def test_material_rejects_nonpositive_ev_on_working_range():
-    FrictionMaterial(mu=0.25, ev_a=1.8, ev_b=0.025, fn_max=100)
+    PointContactParams(material=Material(mu=0.25, ev_a=1.8, ev_b=0.025), fn_max=100)
     with pytest.raises(ValueError, match="falls to"):
-        FrictionMaterial(mu=0.25, ev_a=1.0, ev_b=-0.02, fn_max=100)   # 1 − 2 = −1 at 100 N
-    with pytest.raises(ValueError, match="falls to"):
-        FrictionMaterial(ev_a=0.0)
+        PointContactParams(material=Material(mu=0.25, ev_a=1.0, ev_b=-0.02), fn_max=100)   # 1 − 2 = −1 at 100 N
+    with pytest.raises(ValueError, match="ev_a = 0 must be > 0"):
+        Material(ev_a=0.0)
     # the kernel clamps an out-of-range load at ev_floor rather than reversing friction
     ft = anisotropic_friction([1000.0], [[1.0, 0, 0]], [[1.0, 0, 0]], Z, 0.3, 1.0, -0.01)
     assert ft[0, 0] < 0

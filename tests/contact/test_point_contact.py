@@ -8,7 +8,7 @@ from snakesim.framework import Harness
 
 
 def test_point_contact_matches_kernel():
-    p = dict(n=3, mu=0.5, ev_a=3.0, ev_b=0.0, stiffness=1e4, damping=0.0, v_eps=0.0)
+    p = dict(n=3, material=dict(mu=0.5, ev_a=3.0, ev_b=0.0, k=1e4, c=0.0), v_eps=0.0)
     h = Harness(PointContact, p)
     depth = np.array([0.001, -0.01, 0.002])
     normal = np.repeat([[0.0, 0.0, 1.0]], 3, 0)

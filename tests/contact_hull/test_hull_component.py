@@ -174,6 +174,38 @@ def test_spinning_screw_friction_uses_the_thread_direction():
     assert abs(f[:, 0]).min() > 1.0
 
 
+def test_material_table_packed_once_per_terrain_with_the_override_by_named_columns():
+    """The table comes from materials.material_table (packed when a terrain object is first
+    seen, not per call); the kernel gets k, c, μ, ev_a, ev_b by column name, so an override of
+    μ and ev_a shows in the force exactly as the kernel computes it with those values."""
+    from snakesim.components.contact import contact_forces, thread_direction
+    from snakesim.components.materials import material_table
+
+    mb = Harness(Multibody, {"design": "eels-1.0-front", "modules": 1, "v0": {"screw_front_00": 10.0}})
+    o = mb.outputs()
+    terrain = load_terrain({"kind": "plane", "materials": [{"k": K, "c": C, "mu": 0.3, "ev_a": 3.0, "ev_b": 0.01}]})
+    hc = Harness(HullContact, {"material": {"mu": 0.2, "ev_a": 2.0}}, uses={"robot": mb.c.robot})
+    hc.inputs.terrain = terrain
+    poses = o["link_poses"].copy()
+    poses[:, 2] += 0.09 - 0.001
+    hc.inputs.link_poses, hc.inputs.link_velocities = poses, o["link_velocities"]
+    hc.outputs()
+    table = hc.c._mats
+    np.testing.assert_array_equal(table, [[K, C, 0.2, 2.0, 0.01]])
+    np.testing.assert_array_equal(table, material_table(terrain.materials, hc.c.p.material, fn_max=500.0,
+                                                        ev_floor=hc.c.p.ev_floor))
+    hc.outputs()
+    assert hc.c._mats is table                              # same terrain object: not packed again
+    c = hc.c.last
+    on = c["link"] == hc.c.link_names.index("screw_front_link_00")
+    e = thread_direction(np.tile([0.0, 0.0, -1.0], (on.sum(), 1)), np.array([1.0, 0.0, 0.0]), 0.35, 1)
+    f, _ = contact_forces(c["depth"][on], c["normal"][on], c["slip"][on], e, K, C, 0.2, 2.0, 0.01, 1e-3)
+    np.testing.assert_allclose(c["force"][on], f, rtol=1e-9, atol=1e-9)
+    hc.inputs.terrain = load_terrain({"kind": "plane", "materials": [{"k": 2 * K, "c": C, "mu": 0.3}]})
+    hc.outputs()
+    np.testing.assert_array_equal(hc.c._mats, [[2 * K, C, 0.2, 2.0, 0.0]])     # a new terrain: packed anew
+
+
 # -- errors ---------------------------------------------------------------------------------
 
 def test_blades_need_a_design_with_screws():

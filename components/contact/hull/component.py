@@ -31,7 +31,9 @@ Forces — the SDF back end's kernels, so the two back ends differ only in geome
                    normal at the contact (screw_samples.thread_direction, from the screw
                    axis, the radial direction to the point, lead angle λ, hand) on screw
                    links, isotropic (eq. 1) elsewhere; k, c, μ, ‖e_v‖ = a + b F_n from the
-                   terrain material under the point; slip regularised (v_ε, kernels.py)
+                   terrain material under the point (the table material_table packs once
+                   per terrain object, ``material`` applied, ‖e_v‖ checked on [0, fn_max]);
+                   slip regularised (v_ε, kernels.py)
     body–body      eq. 2 + isotropic friction with body_stiffness, body_damping, body_mu;
                    the force on b is F at the contact point, on a −F (equal and opposite)
 
@@ -52,20 +54,21 @@ import numpy as np
 from pydantic import Field
 
 from snakesim.framework import Component, Input, Output, Params, Uses
+from snakesim.components.materials import EV_A, EV_B, MU, C, K, MaterialPatch, material_table
 from snakesim.components.multibody.robot_model import RobotModel
 from snakesim.components.terrain import Terrain
 
 from ..contact_set import ContactSet
 from ..kernels import EV_FLOOR, MODES
 from ..kernels_numba import body_wrenches_nb, contact_forces_nb
-from ..screw_sdf import MaterialOverride
 from .narrow import Narrowphase
 from .robot_geometry import GeometryOptions, robot_geometry
 from .terrain_geometry import terrain_parts
 
 
 class HullContactParams(Params):
-    material: MaterialOverride | None = Field(None, description="overrides the terrain materials' k, c, mu, ev_a, ev_b")
+    material: MaterialPatch | None = Field(None, description="overrides the terrain materials' k, c, mu, ev_a, ev_b")
+    fn_max: float = Field(500.0, gt=0, description="N, top of the normal load per contact: ‖e_v‖ ≥ ev_floor up to it")
     # geometry
     screw_geometry: Literal["envelope", "blades"] = Field(
         "envelope", description="screws as their envelope cylinder, or the blade mesh's convex hulls")
@@ -127,7 +130,7 @@ class HullContact(Component[HullContactParams]):
 
         self._T = [coal.Transform3s() for _ in range(self.geo.n_pieces)]
         self._narrow = Narrowphase(p.max_contacts)
-        self._terrain, self._parts = None, []
+        self._terrain, self._parts, self._mats = None, [], None
         self._mode = MODES[p.regularisation]
         self.link_names = robot.links
         self.last: dict[str, np.ndarray] = {}
@@ -147,6 +150,8 @@ class HullContact(Component[HullContactParams]):
         if terrain is not self._terrain:
             p = self.p
             self._parts = terrain_parts(terrain, p.terrain_extent, p.terrain_segments, p.terrain_resolution)
+            self._mats = material_table(terrain.materials, p.material, fn_max=p.fn_max, ev_floor=p.ev_floor,
+                                        owner=self.name)
             self._terrain = terrain
         g = self.geo
         near = np.flatnonzero(terrain.distance_lower_bound(cw, g.sphere_r) <= 0.0)
@@ -192,9 +197,6 @@ class HullContact(Component[HullContactParams]):
         e = np.cos(lead)[:, None] * axis - (hand * np.sin(lead))[:, None] * np.cross(axis, radial)
         return np.where((hand != 0)[:, None], e, 0.0)
 
-    def _materials(self, terrain):
-        return (self.p.material or MaterialOverride()).table(terrain.materials)
-
     def output(self, t, x, u, y):
         p = self.p
         poses, vel, terrain = u.link_poses, u.link_velocities, u.terrain
@@ -219,12 +221,13 @@ class HullContact(Component[HullContactParams]):
             t_normal[flip] *= -1.0
             v = self._velocity(t_link, t_point, poses, vel)
             e = self._thread_dirs(t_link, t_point, R, poses)
-            mats = self._materials(terrain)
             for m in np.unique(q.material):
                 sel = q.material == m
                 f, fn = np.empty((sel.sum(), 3)), np.empty(sel.sum())
+                row = self._mats[m]      # packed with this terrain by _terrain_contacts
                 contact_forces_nb(t_depth[sel], t_normal[sel], np.ascontiguousarray(v[sel]),
-                                  np.ascontiguousarray(e[sel]), *mats[m], p.v_eps, self._mode, p.ev_floor, f, fn)
+                                  np.ascontiguousarray(e[sel]), row[K], row[C], row[MU], row[EV_A], row[EV_B],
+                                  p.v_eps, self._mode, p.ev_floor, f, fn)
                 t_force[sel], t_fn[sel] = f, fn
 
         nb = len(brows)
