@@ -1,0 +1,79 @@
+"""``snakesim run --ros2``: the robot's topics on ROS 2 (registered through ``snakesim_run_options``).
+
+    --ros2                    add a ros2_publisher, wired by port role (:mod:`.attach`)
+    --ros2-domain N           DDS domain id (default ROS_DOMAIN_ID, else 0); implies --ros2
+    --ros2-interface IF       network interface or address (default 127.0.0.1: this machine only,
+                              no multicast); implies --ros2
+    --ros2-rate TOPIC=HZ      per-topic rate (clock, joint_states, tf, imu, wrench; 0: off), repeatable;
+                              implies --ros2
+"""
+
+from __future__ import annotations
+
+import click
+
+from snakesim.framework import hookimpl
+
+
+def _ros2(resolved, value):
+    if value:
+        from .attach import attach_ros2
+
+        attach_ros2(resolved)
+
+
+def _domain(resolved, value):
+    from .attach import attach_ros2
+
+    attach_ros2(resolved, params={"domain_id": int(value)})
+
+
+def _interface(resolved, value):
+    from .attach import attach_ros2
+
+    attach_ros2(resolved, params={"interface": value})
+
+
+def _rates(resolved, value):
+    from .attach import attach_ros2
+
+    if not value:
+        return
+    rates = {}
+    for item in value:
+        topic, _, hz = item.partition("=")
+        try:
+            rates[topic.strip()] = float(hz)
+        except ValueError:
+            raise click.BadParameter(f"'{item}': expected TOPIC=HZ, e.g. joint_states=50",
+                                     param_hint="--ros2-rate") from None
+    name = attach_ros2(resolved)
+    spec = resolved.components[name]
+    merged = {**spec.params.get("rates", {}), **rates}
+    attach_ros2(resolved, params={"rates": merged})
+    # the publisher ticks at the fastest topic rate: recompute it
+    from snakesim.framework.rates import nearest_period
+
+    from .publisher import DEFAULT_RATES
+
+    fastest = max((r for r in {**DEFAULT_RATES, **merged}.values() if r > 0), default=1.0)
+    dt = resolved.sim.dt
+    resolved.components[name] = resolved.components[name].model_copy(
+        update={"rate": 1.0 / (nearest_period(fastest, dt) * dt)})
+
+
+@hookimpl(specname="snakesim_run_options")
+def ros2_run_options():
+    return [
+        (click.Option(["--ros2"], is_flag=True, default=None,
+                      help="Publish the robot on ROS 2 (Cyclone DDS; /clock, /joint_states, /tf, "
+                           "/robot_description, /imu and /fts/* when present); loopback only by default."), _ros2),
+        (click.Option(["--ros2-domain"], type=click.IntRange(0, 232), default=None,
+                      help="ROS 2 domain id (default: ROS_DOMAIN_ID, else 0); implies --ros2."), _domain),
+        (click.Option(["--ros2-interface"], default=None,
+                      help="Network interface or address for ROS 2 (default 127.0.0.1: this machine only, "
+                           "no multicast); implies --ros2."), _interface),
+        (click.Option(["--ros2-rate"], multiple=True, default=None, metavar="TOPIC=HZ",
+                      help="ROS 2 topic rate: clock, joint_states, tf, imu, wrench (0: off); repeatable; "
+                           "implies --ros2."), _rates),
+    ]

@@ -1,0 +1,233 @@
+"""ROS 2 publisher sink: the robot's state on the ROS 2 wire protocol (Cyclone DDS, no ROS installation).
+
+A sink (``is_sink``) at the fastest of its topic rates; each topic publishes
+every ``period_of(rate, 1 / component rate)`` of its ticks (so per-topic rates
+must divide the component's). ``snakesim run --ros2`` adds and wires it
+(:mod:`.attach`); in YAML::
+
+    ros: {type: ros2_publisher, rate: 100, params: {domain_id: 7, rates: {joint_states: 100, tf: 50}}}
+    connections: [robot.joint_q -> ros.joint_positions, robot.joint_v -> ros.joint_velocities,
+                  robot.link_poses -> ros.link_poses]
+
+Topics (QoS: :mod:`.transport`; types: :mod:`.messages`):
+
+    /clock              rosgraph_msgs/Clock        simulated time (rates.clock)
+    /joint_states       sensor_msgs/JointState     robot.joints (every DOF joint, URDF names), position, velocity;
+                                                   effort when params.effort (joint_efforts wired)
+    /tf                 tf2_msgs/TFMessage         every link's pose as a transform from params.world_frame
+                                                   (a star: parent world_frame for every link, not the URDF
+                                                   chain), child_frame_id = link name
+    /robot_description  std_msgs/String            robot.urdf, once, transient local (latched)
+    /imu                sensor_msgs/Imu            when params.imu_frame: frame_id that link, covariances
+                                                   diag(imu_gyro_noise²), diag(imu_accel_noise²), orientation
+                                                   covariance 0 (exact)
+    /fts/<cut joint>    geometry_msgs/WrenchStamped  one per sensor of params.wrench_cuts (frame_id: its link)
+
+Stamps are simulated time. The messages are serialised once and patched in
+place each tick (:mod:`.template`): a publish allocates nothing per joint or
+link. The DDS participant is opened on the first tick (not at build, so
+``snakesim check`` opens none) and closed with the component.
+
+uses robot: RobotModel (optional): joint and link names, the URDF
+in   joint_positions[nj] rad, joint_velocities[nj] rad/s, joint_efforts[nj] N·m,
+     link_poses[nl, 7] [x, y, z, qx, qy, qz, qw] world, imu_angular_rate[3], imu_specific_force[3],
+     imu_orientation[4], sensor_wrenches[n, 6]   (all optional; matched by role by --ros2)
+out  none
+"""
+
+from __future__ import annotations
+
+import time
+import weakref
+
+import numpy as np
+from pydantic import Field
+
+from snakesim.components.multibody.robot_model import RobotModel
+from snakesim.components.port_roles import (IMU_ANGULAR_RATE, IMU_ORIENTATION, IMU_SPECIFIC_FORCE, JOINT_EFFORTS,
+                                            JOINT_POSITIONS, JOINT_VELOCITIES, LINK_POSES, SENSOR_WRENCHES)
+from snakesim.framework import Component, Input, Params, Uses
+from snakesim.framework.rates import period_of
+
+from .template import CdrTemplate, RawWriter
+from .transport import LOOPBACK
+
+TOPICS = ("clock", "joint_states", "tf", "imu", "wrench")
+DEFAULT_RATES = {"clock": 100.0, "joint_states": 100.0, "tf": 50.0, "imu": 100.0, "wrench": 100.0}
+
+
+class Ros2PublisherParams(Params):
+    domain_id: int | None = Field(None, ge=0, le=232, description="DDS domain (default: ROS_DOMAIN_ID, else 0)")
+    interface: str = Field(LOOPBACK, description="network interface name or address; 127.0.0.1 (default): "
+                                                 "this machine only, no multicast")
+    rates: dict[str, float] = Field(default_factory=dict,
+                                    description=f"Hz per topic ({', '.join(TOPICS)}); default {DEFAULT_RATES}; "
+                                                "0 turns a topic off")
+    world_frame: str = Field("world", description="parent frame of every link in /tf")
+    effort: bool = Field(False, description="publish JointState.effort from joint_efforts (wired)")
+    robot_description: bool = Field(True, description="publish robot.urdf on /robot_description (latched)")
+    imu_frame: str | None = Field(None, description="publish /imu with this frame_id (IMU inputs wired)")
+    imu_gyro_noise: float = Field(0.0, ge=0, description="rad/s, for the covariance")
+    imu_accel_noise: float = Field(0.0, ge=0, description="m/s², for the covariance")
+    wrench_cuts: list[str] = Field(default_factory=list,
+                                   description="force-torque sensor cuts (as force_torque_sensors.cuts): one "
+                                               "/fts/<joint> WrenchStamped each, from sensor_wrenches")
+
+
+def _nj(c):
+    return (c.nj,)
+
+
+class Ros2Publisher(Component[Ros2PublisherParams]):
+    type_name = "ros2_publisher"
+    Params = Ros2PublisherParams
+    is_sink = True
+
+    robot = Uses(RobotModel, required=False, doc="joint and link names, the URDF")
+
+    joint_positions = Input(shape=_nj, unit="rad", default=0.0, role=JOINT_POSITIONS)
+    joint_velocities = Input(shape=_nj, unit="rad/s", default=0.0, role=JOINT_VELOCITIES)
+    joint_efforts = Input(shape=_nj, unit="N*m", default=0.0, role=JOINT_EFFORTS)
+    link_poses = Input(shape=lambda c: (c.nl, 7), unit=None, default=0.0, role=LINK_POSES)
+    imu_angular_rate = Input(shape=(3,), unit="rad/s", default=0.0, role=IMU_ANGULAR_RATE)
+    imu_specific_force = Input(shape=(3,), unit="m/s**2", default=0.0, role=IMU_SPECIFIC_FORCE)
+    imu_orientation = Input(shape=(4,), unit="1", default=0.0, role=IMU_ORIENTATION)
+    sensor_wrenches = Input(shape=lambda c: (len(c.wrench_joints), 6), unit=None, default=0.0, role=SENSOR_WRENCHES)
+
+    def setup(self):
+        p, robot = self.p, self.robot
+        unknown = sorted(set(p.rates) - set(TOPICS))
+        if unknown:
+            raise ValueError(f"{self.name}: rates: unknown topics {unknown}; topics: {', '.join(TOPICS)}")
+        if any(r < 0 for r in p.rates.values()):
+            raise ValueError(f"{self.name}: rates must be >= 0 Hz (0: off)")
+        self.joints = robot.joints if robot is not None else ()
+        self.links = robot.links if robot is not None else ()
+        self.nj, self.nl = len(self.joints), len(self.links)
+        if p.wrench_cuts and robot is not None:
+            self.wrench_joints, self.wrench_links = robot.cuts(p.wrench_cuts)
+        else:
+            self.wrench_joints, self.wrench_links = [], []
+        rates = {**DEFAULT_RATES, **p.rates}
+        on = {"clock": True, "joint_states": self.nj > 0, "tf": self.nl > 0, "imu": p.imu_frame is not None,
+              "wrench": bool(self.wrench_joints)}
+        self.topic_rates = {k: r for k, r in rates.items() if on[k] and r > 0}
+        if self.rate is None:                    # the sink's tick: the fastest topic
+            self.rate = max(self.topic_rates.values(), default=1.0)
+        tick = 1.0 / self.rate
+        self.periods = {k: period_of(r, tick, f"{self.name}: rates.{k} (at the component's {self.rate:g} Hz):")
+                        for k, r in self.topic_rates.items()}
+        self._templates = self._make_templates()
+        self._dds = None
+        self._finalizer = None
+        self.published = dict.fromkeys(self.topic_rates, 0)
+        self.publish_time = 0.0                  # wall s spent publishing (the interface's cost per tick)
+        self.open_time = 0.0                     # wall s to open the participant and writers (first tick)
+
+    # -- templates: the messages of this robot, serialised once ----------------------------
+    def _make_templates(self) -> dict:
+        from . import messages as M        # cyclonedds and rosbags load when a publisher is built, not at plugin load
+
+        p = self.p
+        out = {}
+
+        def stamp(msg, tm):
+            msg.header.stamp = tm
+
+        out["clock"] = ("/clock", M.Clock, CdrTemplate.of(M.Clock(), {}, [lambda m, tm: setattr(m, "clock", tm)]))
+        if "joint_states" in self.topic_rates:
+            msg = M.JointState(name=list(self.joints))
+            fields = {"position": (lambda m, v: setattr(m, "position", list(v)), self.nj),
+                      "velocity": (lambda m, v: setattr(m, "velocity", list(v)), self.nj)}
+            if p.effort:
+                fields["effort"] = (lambda m, v: setattr(m, "effort", list(v)), self.nj)
+            out["joint_states"] = ("/joint_states", M.JointState, CdrTemplate.of(msg, fields, [stamp]))
+        if "tf" in self.topic_rates:
+            msg = M.TFMessage(transforms=[M.TransformStamped(header=M.Header(frame_id=p.world_frame), child_frame_id=ln)
+                                          for ln in self.links])
+
+            def poses(m, v):
+                for tr, row in zip(m.transforms, np.asarray(v).reshape(-1, 7)):
+                    tr.transform = M.Transform(translation=M.Vector3(*row[:3]), rotation=M.Quaternion(*row[3:]))
+
+            stamps = [(lambda m, tm, i=i: setattr(m.transforms[i].header, "stamp", tm)) for i in range(self.nl)]
+            out["tf"] = ("/tf", M.TFMessage, CdrTemplate.of(msg, {"poses": (poses, 7 * self.nl)}, stamps))
+        if "imu" in self.topic_rates:
+            cov_g = list(np.diag(np.full(3, p.imu_gyro_noise ** 2)).ravel())
+            cov_a = list(np.diag(np.full(3, p.imu_accel_noise ** 2)).ravel())
+            msg = M.Imu(header=M.Header(frame_id=p.imu_frame), angular_velocity_covariance=cov_g,
+                        linear_acceleration_covariance=cov_a)
+            fields = {"orientation": (lambda m, v: setattr(m, "orientation", M.Quaternion(*v)), 4),
+                      "angular_velocity": (lambda m, v: setattr(m, "angular_velocity", M.Vector3(*v)), 3),
+                      "linear_acceleration": (lambda m, v: setattr(m, "linear_acceleration", M.Vector3(*v)), 3)}
+            out["imu"] = ("/imu", M.Imu, CdrTemplate.of(msg, fields, [stamp]))
+        if "wrench" in self.topic_rates:
+            def wrench(m, v):
+                m.wrench = M.Wrench(force=M.Vector3(*v[:3]), torque=M.Vector3(*v[3:]))
+
+            out["wrench"] = [(f"/fts/{j}", M.WrenchStamped,
+                              CdrTemplate.of(M.WrenchStamped(header=M.Header(frame_id=ln)), {"wrench": (wrench, 6)},
+                                             [stamp]))
+                             for j, ln in zip(self.wrench_joints, self.wrench_links)]
+        return out
+
+    # -- opening and closing ------------------------------------------------------------------
+    def _open(self, u):
+        from .transport import Ros2Participant
+
+        p = self.p
+        dds = Ros2Participant(p.domain_id, p.interface)
+        writers = {}
+        for key, entry in self._templates.items():
+            if key not in self.topic_rates:
+                continue
+            for topic, typ, tpl in (entry if isinstance(entry, list) else [entry]):
+                writers.setdefault(key, []).append((RawWriter(dds.writer(topic, typ)), tpl))
+        if p.robot_description and self.robot is not None:
+            from . import messages as M
+
+            w = dds.writer("/robot_description", M.String)
+            w.write(M.String(data=self.robot.urdf))
+        self._writers = writers
+        self._inputs = {"joint_states": [("position", u.joint_positions), ("velocity", u.joint_velocities)]
+                        + ([("effort", u.joint_efforts)] if p.effort else []),
+                        "tf": [("poses", u.link_poses)],
+                        "imu": [("orientation", u.imu_orientation), ("angular_velocity", u.imu_angular_rate),
+                                ("linear_acceleration", u.imu_specific_force)]}
+        self._wrenches = u.sensor_wrenches
+        # (key, period, writers, inputs) in a flat tuple: the per-tick loop reads no dicts
+        self._plan = tuple((key, self.periods[key], tuple(writers[key]), tuple(self._inputs.get(key, ())))
+                           for key in self.topic_rates)
+        self._tick = 0
+        self._dds = dds
+        self._finalizer = weakref.finalize(self, dds.close)
+
+    def close(self) -> None:
+        if self._finalizer is not None:
+            self._finalizer()
+        self._finalizer, self._dds = None, None
+
+    # -- the per-tick path ----------------------------------------------------------------------
+    def update(self, t, xd, u):
+        if self._dds is None:
+            wall = time.perf_counter()
+            self._open(u)
+            self.open_time = time.perf_counter() - wall
+        wall = time.perf_counter()
+        ns = int(t * 1e9 + 0.5) if t > 0 else 0
+        sec, nsec = divmod(ns, 1_000_000_000)
+        tick = self._tick
+        for key, period, writers, inputs in self._plan:
+            if tick % period:
+                continue
+            for k, (writer, tpl) in enumerate(writers):
+                tpl.set_stamp(sec, nsec)
+                if key == "wrench":
+                    tpl.set_floats("wrench", self._wrenches[k])
+                else:
+                    for field, arr in inputs:
+                        tpl.set_floats(field, arr.reshape(-1))
+                writer.write(tpl.buf)
+            self.published[key] += 1
+        self._tick = tick + 1
+        self.publish_time += time.perf_counter() - wall

@@ -1,0 +1,147 @@
+"""A DDS participant on ROS 2's conventions: what makes snakesim's topics visible to any ROS 2 node.
+
+No ROS installation: Cyclone DDS (``cyclonedds``), the RMW that ROS 2 ships by
+default in several distributions, speaking the same RTPS wire protocol.
+ROS 2's conventions on top of DDS:
+
+    topic names     ``rt/<name>`` for topic ``/<name>`` (``rq/…Request``, ``rr/…Reply`` for services)
+    type names      ``<pkg>::msg::dds_::<Type>_`` (:mod:`.messages`)
+    encoding        plain CDR (XCDR1), as rmw_cyclonedds and rmw_fastrtps write it
+    QoS             the profiles of rclcpp/tf2 (:data:`QOS`): default (reliable, keep last 10,
+                    volatile); ``/clock`` as rclcpp::ClockQoS (best effort, keep last 1);
+                    ``/tf`` as tf2's DynamicBroadcasterQoS (reliable, keep last 100);
+                    ``/tf_static`` and ``/robot_description`` latched (reliable, transient local,
+                    keep last 1), so a node that starts later still gets them
+
+Network: by default traffic stays on this machine. Cyclone is configured
+(its XML, per domain, given to ``Domain``; nothing in the environment is read
+or changed) to use the loopback interface only, with multicast off and
+unicast discovery to 127.0.0.1, so nothing is sent to any other host and no
+multicast leaves the machine. ``interface`` names another interface or
+address (e.g. ``eth0``) to talk to a robot computer; then multicast
+discovery is on as ROS 2 has it. The domain id defaults to ``ROS_DOMAIN_ID``
+(else 0), as for ROS 2 nodes.
+
+A ROS 2 node on the same machine must use the same setting to see the topics,
+e.g. ``CYCLONEDDS_URI`` with :func:`cyclone_xml`'s text (the README gives it);
+``ros2 topic list`` then shows them.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+
+LOOPBACK = "127.0.0.1"
+#: highest participant index a loopback (unicast) discovery probes; ~this many processes per domain per host
+MAX_PARTICIPANTS = 32
+
+
+def default_domain() -> int:
+    """ROS_DOMAIN_ID, else 0 (ROS 2's rule)."""
+    v = os.environ.get("ROS_DOMAIN_ID", "").strip()
+    return int(v) if v.isdigit() else 0
+
+
+def cyclone_xml(interface: str = LOOPBACK, domain_id: int | str = "any") -> str:
+    """Cyclone DDS configuration: loopback only, no multicast (default), or ``interface`` with multicast."""
+    local = interface in (LOOPBACK, "lo", "localhost")
+    iface = f'<NetworkInterface address="{LOOPBACK}"/>' if local else (
+        f'<NetworkInterface address="{interface}"/>' if interface[:1].isdigit() else f'<NetworkInterface name="{interface}"/>')
+    discovery = (f"<Discovery><ParticipantIndex>auto</ParticipantIndex>"
+                 f"<MaxAutoParticipantIndex>{MAX_PARTICIPANTS}</MaxAutoParticipantIndex>"
+                 f'<Peers><Peer address="{LOOPBACK}"/></Peers></Discovery>') if local else ""
+    multicast = "<AllowMulticast>false</AllowMulticast>" if local else ""
+    return (f'<CycloneDDS><Domain id="{domain_id}"><General><Interfaces>{iface}</Interfaces>{multicast}'
+            f"</General>{discovery}</Domain></CycloneDDS>")
+
+
+@dataclass(frozen=True)
+class TopicQos:
+    reliable: bool = True
+    depth: int = 10
+    transient_local: bool = False
+
+    def qos(self):
+        from cyclonedds.qos import Policy, Qos
+        from cyclonedds.util import duration
+
+        return Qos(Policy.Reliability.Reliable(duration(milliseconds=100)) if self.reliable
+                   else Policy.Reliability.BestEffort,
+                   Policy.History.KeepLast(self.depth),
+                   Policy.Durability.TransientLocal if self.transient_local else Policy.Durability.Volatile,
+                   Policy.DataRepresentation(use_cdrv0_representation=True))
+
+
+DEFAULT_QOS = TopicQos()                                     # rclcpp::QoS(10): SystemDefaultsQoS with depth 10
+CLOCK_QOS = TopicQos(reliable=False, depth=1)                # rclcpp::ClockQoS
+TF_QOS = TopicQos(depth=100)                                 # tf2_ros::DynamicBroadcasterQoS
+LATCHED_QOS = TopicQos(depth=1, transient_local=True)        # tf2_ros::StaticBroadcasterQoS, robot_description
+
+#: QoS by topic; others: DEFAULT_QOS
+QOS = {"/clock": CLOCK_QOS, "/tf": TF_QOS, "/tf_static": LATCHED_QOS, "/robot_description": LATCHED_QOS}
+
+
+def dds_topic_name(topic: str) -> str:
+    """'/joint_states' -> 'rt/joint_states' (ROS 2's topic prefix)."""
+    name = topic.lstrip("/")
+    if not name or any(c.isspace() for c in name):
+        raise ValueError(f"ROS 2 topic name '{topic}' is empty or has white space")
+    return f"rt/{name}"
+
+
+class Ros2Participant:
+    """One DDS participant on ``domain_id`` with ROS 2 topic, type and QoS conventions.
+
+    ``writer(topic, MsgType)`` and ``reader(topic, MsgType)`` make endpoints;
+    :meth:`close` (or the context manager) releases them. Cyclone's domain is
+    created here with :func:`cyclone_xml`, so the process's CYCLONEDDS_URI is
+    not used for it.
+    """
+
+    def __init__(self, domain_id: int | None = None, interface: str = LOOPBACK):
+        from cyclonedds.domain import Domain, DomainParticipant
+
+        self.domain_id = default_domain() if domain_id is None else int(domain_id)
+        if not 0 <= self.domain_id <= 232:
+            raise ValueError(f"ROS 2 domain id must be 0..232, got {self.domain_id}")
+        self.interface = interface
+        self._domain = Domain(self.domain_id, cyclone_xml(interface, self.domain_id))
+        self.participant = DomainParticipant(self.domain_id)
+        self._topics: dict[str, object] = {}
+        self._entities: list = []
+
+    def _topic(self, topic: str, msg_type):
+        from cyclonedds.topic import Topic
+
+        name = dds_topic_name(topic)
+        t = self._topics.get(name)
+        if t is None:
+            t = self._topics[name] = Topic(self.participant, name, msg_type)
+        return t
+
+    def writer(self, topic: str, msg_type, qos: TopicQos | None = None):
+        from cyclonedds.pub import DataWriter
+
+        w = DataWriter(self.participant, self._topic(topic, msg_type), (qos or QOS.get(topic, DEFAULT_QOS)).qos())
+        self._entities.append(w)
+        return w
+
+    def reader(self, topic: str, msg_type, qos: TopicQos | None = None):
+        from cyclonedds.sub import DataReader
+
+        r = DataReader(self.participant, self._topic(topic, msg_type), (qos or QOS.get(topic, DEFAULT_QOS)).qos())
+        self._entities.append(r)
+        return r
+
+    def close(self) -> None:
+        self._entities.clear()
+        self._topics.clear()
+        self.participant = None
+        self._domain = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()

@@ -1,0 +1,29 @@
+import os
+import sys
+
+import pytest
+
+sys.path.insert(0, os.path.dirname(__file__))
+
+
+def _dds_or_skip():
+    try:
+        import cyclonedds.domain  # noqa: F401
+        import rosbags.typesys  # noqa: F401
+    except Exception as e:            # pragma: no cover - the dependency is declared
+        pytest.skip(f"cyclonedds/rosbags not importable: {e}")
+
+
+@pytest.fixture(scope="session")
+def dds_domain():
+    """A domain id no other test (or concurrent run) of this session uses, and a check that DDS starts here."""
+    _dds_or_skip()
+    from snakesim.components.ros2.transport import Ros2Participant
+
+    base = 100 + os.getpid() % 100
+    try:
+        Ros2Participant(base).close()
+    except Exception as e:
+        pytest.skip(f"Cyclone DDS cannot start on loopback in this sandbox: {e}")
+    counter = iter(range(base, 233))
+    return lambda: next(counter)
