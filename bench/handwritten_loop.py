@@ -6,20 +6,23 @@ on flat ice, joint PIDs, a screw speed schedule, SDF screw contact) run with
 framework: one Python loop over time calling Pinocchio and the same numba kernels on
 preallocated arrays --
 
-    state_outputs (link kinematics) -> schedule look-up -> pid_law -> plane_contact_step
-    -> joint_forces -> pin.aba -> PID state rates -> symplectic Euler (pin.integrate)
+    state_step (link kinematics) -> schedule look-up -> pid_step -> plane_step
+    -> force_step -> pin.aba -> PID state rates -> symplectic Euler (pin.integrate)
 
-with the tail's planar pose (x, y, yaw) recorded at the scene's record rate. It borrows
-the set-up (the Pinocchio model, tree arrays, contact sample tables, gains) from the
-built scene, so both sides do the same arithmetic; the framework run records the same
-signal (tail_pose.pose) and keeps the scene's stop condition. Both must end in the same
-state (checked: bit-identical, or the script says by how much they differ).
+with the tail's planar pose (x, y, yaw) recorded at the scene's record rate. The kernels
+take argument records (components/kernel_args.py); the loop builds its own records on its
+own arrays and calls the kernels bound to them (``bind``), as the components do, so both
+sides pay the same per call and the ratio is the dataflow's cost alone. It borrows the
+set-up (the Pinocchio model, the robot's tree record, the contact's sample tables, the
+PID gains) from the built scene, so both sides do the same arithmetic; the framework run
+records the same signal (tail_pose.pose) and keeps the scene's stop condition. Both must
+end in the same state (checked: bit-identical, or the script says by how much they differ).
 
     .venv/bin/python bench/handwritten_loop.py [--modules 10] [--dt 0.001] [--duration 5]
                                                [--repeats 3] [--json FILE]
 
 Prints wall time per simulated second, real-time factor and µs per step for both, and
-the ratio framework / hand-written (target: ≤ 1.3). Reference figures from issue 6: a
+the ratio framework / hand-written (target: ≤ 1.15). Reference figures from issue 6: a
 minimal hand-written Pinocchio + numpy loop with 40 penalty contacts ran ~8x real time
 at 10 modules and 1.7x at 100.
 """
@@ -41,16 +44,17 @@ import click  # noqa: E402
 import numpy as np  # noqa: E402
 import pinocchio as pin  # noqa: E402
 
-from snakesim.components.contact.sdf_kernels import plane_contact_step  # noqa: E402
-from snakesim.components.control.pid_kernel import pid_law  # noqa: E402
-from snakesim.components.multibody.kernels import joint_forces, state_outputs  # noqa: E402
+from snakesim.components.contact.sdf_kernels import SdfPorts, SdfWork, Surface, plane_step  # noqa: E402
+from snakesim.components.control.pid_kernel import PidRun, pid_step  # noqa: E402
+from snakesim.components.kernel_args import bind  # noqa: E402
+from snakesim.components.multibody.kernels import Kin, Ports, force_step, state_step  # noqa: E402
 from snakesim.framework.assembly import resolve  # noqa: E402
 from snakesim.framework.registry import default_registry  # noqa: E402
 from snakesim.framework.session import Session  # noqa: E402
 from snakesim.framework.wiring import PortRef  # noqa: E402
 
 SCENE = "surface-screw-traverse"
-TARGET = 1.3
+TARGET = 1.15
 EXPECTED = {"robot": "multibody", "pid": "joint_pid", "phases": "screw_schedule", "contact": "screw_sdf_contact",
             "terrain": "terrain", "tail_pose": "planar_pose"}
 
@@ -82,42 +86,54 @@ class HandLoop:
 
     def run(self):
         mb, pid, sc, c = self.mb, self.pid, self.sched, self.contact
-        ta, lay = mb._ta, c.layout
+        lay, terrain = c.screws, self.terrain
         model, data = mb.dyn.model, mb.dyn.data
-        nq, nv, nl, nj = mb._nq, mb._nv, len(mb.robot.links), len(mb.robot.joints)
+        nq, nv, nl, nj, ns, n = mb._nq, mb._nv, len(mb.robot.links), len(mb.robot.joints), lay.ns, c.n_samples
+        z = np.zeros
         x = self.X0["robot"].copy()
         xp = self.X0["pid"].copy()
         q, v = x[:nq].copy(), x[nq:].copy()
-        R, p, w, vo, aw, thd = (np.zeros((nl, 3, 3)), np.zeros((nl, 3)), np.zeros((nl, 3)), np.zeros((nl, 3)),
-                                np.zeros((nl, 3)), np.zeros(nl))
-        jq, jv, poses, vels = np.zeros(nj), np.zeros(nj), np.zeros((nl, 7)), np.zeros((nl, 6))
-        tau, err, dint, zrate = np.zeros(nj), np.zeros(nj), np.zeros(nj), np.zeros(nj)
-        zero_nj = np.zeros(nj)
-        W, S, T = np.zeros((nl, 6)), np.zeros((nl, 6)), np.zeros(nv)
-        fn, cnt = np.zeros(lay.ns), 0
-        mats = c._material_table(self.terrain)
-        origin, normal, region = c._plane
+        R, p, thd, jq, jv, poses, vels = z((nl, 3, 3)), z((nl, 3)), z(nl), z(nj), z(nj), z((nl, 7)), z((nl, 6))
+        tau, err, dint, zrate, setpoint, zero_nj = z(nj), z(nj), z(nj), z(nj), z(nj), z(nj)
+        W, T = z((nl, 6)), z(nv)
+        # the records the kernels take, on this loop's arrays (gravity input: NaN, the parameter's)
+        g = mb._g_param.copy()
+        kin = Kin(q=q, v=v, at_q=z(nq), at_v=z(nv), fresh=z(1, dtype=bool), R=R, p=p, w=z((nl, 3)), vo=z((nl, 3)),
+                  aw=z((nl, 3)), thd=thd, alpha=z((nl, 3)), ao=z((nl, 3)), S=z((nl, 6)), T=T, qdd=z(nv), g=g,
+                  h_scratch=z(6), c_scratch=z(3), e_scratch=z(2))
+        ports = Ports(tau=tau, wrenches=W, gravity=np.full(1, np.nan), q=z(nq), v=z(nv), joint_q=jq, joint_v=jv,
+                      link_poses=poses, link_velocities=vels, link_rotations=z((nl, 3, 3)), momentum=z(6), com=z(3),
+                      energy=z(2), a=z(nv), link_accelerations=z((nl, 6)), joint_wrenches=z((nl, 6)), want_qv=False,
+                      want_rot=False, want_cut=False)
+        work = SdfWork(active=z(ns, dtype=np.int64), centres=z((ns, 3)), points=z((n, 3)), distance=z(n),
+                       normal=z((n, 3)), material=z(n, dtype=np.int64), sample=z(n, dtype=np.int64),
+                       owner=z(n, dtype=np.int64), R=z((3, 3)), point=z((n, 3)), vel=z((n, 3)), force=z((n, 3)),
+                       fn=z(n), counts=z(5, dtype=np.int64), track=False, seen_poses=z((nl, 7)),
+                       seen_vels=z((nl, 6)), seen_joint_v=z(nj))
+        contact_ports = SdfPorts(poses=poses, vels=vels, joint_v=jv, wrenches=W, screw_fn=z(ns), normal_force=z(1),
+                                 contacts=z(1))
+        surface = Surface(origin=np.array(terrain.origin, dtype=float), n=np.array(terrain.n, dtype=float),
+                          region_material=int(terrain.region_material[0]), mats=c._material_table(terrain))
+        state = bind(state_step, mb._tree, kin, ports)
+        force = bind(force_step, mb._tree, kin, ports)
+        law = bind(pid_step, pid._gains, PidRun(setpoint=setpoint, rate_ref=zero_nj, tau_ff=zero_nj, q=jq, v=jv,
+                                                x=xp, tau=tau, err=err, dint=dint, zrate=zrate))
+        contact = bind(plane_step, c._samples, work, contact_ports, surface)
         times, table = sc._t, sc._table
         tail_i, tail_axis = self.tail._i, self.tail._axis
-        h = self.dt
-        hh = h * h
-        n_steps = int(round(self.duration / h))
+        dt = self.dt
+        n_steps = int(round(self.duration / dt))
         log = np.zeros((n_steps // self.record_every + 1, 4))
+        cnt = 0
         dq = np.zeros(nv)
         for k in range(n_steps + 1):
-            t = k * h
-            state_outputs(ta.order, ta.parent, ta.jtype, ta.R0, ta.p0, ta.axis, ta.qidx, ta.qkind, ta.vidx, ta.mult,
-                          ta.offset, q, v, R, p, w, vo, aw, thd, mb._jq_idx, mb._jq_cs, mb._dof_v, jq, jv, poses, vels)
-            setpoint = table[int(np.searchsorted(times, t, side="right"))]
-            pid_law(pid._pos, pid._cont, pid._kp, pid._ki, pid._kd, pid._tf, pid._tmax, pid._inv_tf, pid._a,
-                    pid._T, pid._discrete, pid._clamp, setpoint, zero_nj, zero_nj, jq, jv, xp, tau, err, dint, zrate)
-            plane_contact_step(c.p.broad_phase, origin, normal, region, c._sphere_r, c._start, c._points_B,
-                               lay.mount_p, c._active, c._centres, c._pts, c._dist, c._normal, c._mat, c._sample,
-                               c._owner, poses, vels, jv, c._ringc_B, c._radial_B, c._axis_B, lay.parent_row,
-                               lay.screw_row, lay.radius, lay.lead_angle, lay.hand, lay.spin_dof, lay.spin_mult, mats,
-                               c.p.v_eps, c._mode, c.p.ev_floor, c._R, c._cpt, c._vel, c._force, c._fn, W, fn)
-            joint_forces(W.any(), mb._dof_v, tau, mb._damp, v, ta.order, ta.parent, ta.jtype, ta.vidx, ta.mult,
-                         R, p, aw, W, S, T)
+            t = k * dt
+            state()
+            setpoint[:] = table[int(np.searchsorted(times, t, side="right"))]
+            law()
+            contact()
+            if force():                          # gravity changed (never here: the input is unconnected)
+                model.gravity.linear[:] = g
             a = pin.aba(model, data, q, v, T)
             if k % self.record_every == 0:
                 d = R[tail_i] @ tail_axis
@@ -125,12 +141,16 @@ class HandLoop:
                 cnt += 1
             if k == n_steps:
                 break
-            # symplectic Euler exactly as the framework's: q ⊕ (h v + h² a), v + h a; PID state explicit
+            # symplectic Euler exactly as the framework's: q ⊕ (h v + h² a), v + h a; PID state explicit.
+            # The step is (t + dt) − t, as the framework's integrators take it (it rounds differently
+            # from dt in the last bits)
+            h = (t + dt) - t
+            hh = h * h
             np.multiply(v, h, out=dq)
             dq += hh * a
             xp[:nj] += h * dint
             xp[nj:] += h * zrate
-            q = pin.integrate(model, q, dq)
+            q[:] = pin.integrate(model, q, dq)
             v += h * a
         return np.concatenate([q, v]), xp, log[:cnt]
 

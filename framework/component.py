@@ -182,7 +182,8 @@ class Component(Generic[P]):
         this plan's state view ``x`` (None without state), inputs ``u`` and output
         buffers ``y``: arrays there are never reallocated, so a kernel's argument
         record can hold views of them. Every method then finds the result as
-        ``u.cache``. The component object itself keeps parameters and constants.
+        ``u.cache`` (a session as ``plan.caches[name]``). The component object
+        itself keeps parameters and constants.
         """
         return None
 

@@ -84,6 +84,7 @@ class Plan:
     record_every: int                             # base steps between recorded rows
     stops: tuple[StopCondition, ...]
     used: frozenset                               # output ports something reads
+    caches: dict = field(default_factory=dict)    # component -> what its make_cache() returned (its u.cache)
     report: dict = field(default_factory=dict)
 
     # -- the continuous system the integrators see ------------------------------
@@ -111,6 +112,20 @@ class Plan:
         np.add(X[:e], dX[:e], out=out[:e])
         for s in self._manifold:
             s.comp.integrate(X[s.x], dX[s.dx], out[s.x])
+
+    def bind_integrate(self, X: np.ndarray, dX: np.ndarray, out: np.ndarray):
+        """``integrate(X, dX, out)`` for buffers fixed for a run (an integrator's work arrays, the
+        plan's X): a call without arguments, its views made once."""
+        e = self.n_euclid_x
+        xe, dxe, oe = X[:e], dX[:e], out[:e]
+        parts = tuple((s.comp.integrate, X[s.x], dX[s.dx], out[s.x]) for s in self._manifold)
+        add = np.add
+
+        def integrate():
+            add(xe, dxe, out=oe)
+            for fn, x, dx, o in parts:
+                fn(x, dx, o)
+        return integrate
 
     def dexp_inv(self, X0: np.ndarray, dX: np.ndarray, K: np.ndarray) -> None:
         """Munthe-Kaas correction of a stage derivative K taken at X0 ⊕ dX (manifold states only)."""
@@ -503,9 +518,11 @@ def build(resolved: Resolved, registry) -> Plan:
         return (node.method, x_of.get(n, xd_of.get(n)), u_of[n], y_of[n])
 
     used = frozenset(sources.values()) | frozenset(recorded) | frozenset(stopped)
+    caches = {}
     for n, c in comps.items():
         c.bind_outputs(frozenset(p for p in c.outputs if PortRef(n, p) in used))
-        set_cache(u_of[n], c.make_cache(x_of.get(n, xd_of.get(n)), u_of[n], y_of[n]))
+        caches[n] = c.make_cache(x_of.get(n, xd_of.get(n)), u_of[n], y_of[n])
+        set_cache(u_of[n], caches[n])
     calls = [(nodes[i], call(nodes[i])) for i in order]
     minor = tuple(call(nodes[i]) for i in order if i in minor_set)
     major = _major_lists(calls, n_phases, used)
@@ -538,4 +555,4 @@ def build(resolved: Resolved, registry) -> Plan:
                 nodes=tuple(nodes[i] for i in order), minor=minor, major=major, updates=updates, derivs=derivs,
                 once=once, n_phases=n_phases, X=X, DX=DX, XD=XD, slices=tuple(slices), dslices=dslices,
                 n_euclid_x=n_euclid, stop_flag=stop_flag, dt=dt, record_refs=tuple(recorded),
-                record_every=record_every, stops=stops, used=used, report=report)
+                record_every=record_every, stops=stops, used=used, caches=caches, report=report)

@@ -63,12 +63,14 @@ class Simulator:
         X_good, XD_good = X.copy(), XD.copy()
         for fn, x, u, y in plan.once:
             fn(t0, x, u, y)
-        major, updates, derivs = plan.major, plan.updates, plan.derivs
-        n_phases, rec_every = plan.n_phases, plan.record_every
-        has_cont = plan.nx > 0
-        stops, flag = plan.stops, plan.stop_flag
+        has_cont, has_disc = plan.nx > 0, plan.XD.size > 0
+        # each phase's evaluation: the major pass, then the derivatives (the integrator's first stage)
+        passes = tuple(m + plan.derivs for m in plan.major) if has_cont else plan.major
+        updates, n_phases, rec_every = plan.updates, plan.n_phases, plan.record_every
+        stops, flag, DX, advance = plan.stops, plan.stop_flag, plan.DX, integ.advance
         flag.reason = flag.source = None
         stop_reason, bad = None, None
+        isfinite, copyto = math.isfinite, np.copyto
         wall0 = time.perf_counter()
         next_report = wall0 + 0.5
         t_good = t = t0
@@ -76,11 +78,8 @@ class Simulator:
         for k in range(n_steps + 1):
             t = t0 + k * dt
             phase = k % n_phases
-            for fn, x, u, y in major[phase]:
+            for fn, x, u, y in passes[phase]:
                 fn(t, x, u, y)
-            if has_cont:
-                for fn, x, u, dx in derivs:
-                    fn(t, x, u, dx)
             if k % rec_every == 0:
                 log.record(t)
             for cond in stops:
@@ -95,19 +94,24 @@ class Simulator:
                 fn(t, xd, u)
             if has_cont:
                 try:
-                    integ.advance(t, t + dt, plan.DX)
+                    advance(t, t + dt, DX)
                 except (SnakesimError, FloatingPointError) as e:
                     # e.g. an adaptive step collapsing: stop like a blow-up, keeping the last good state
                     bad = True
                     stop_reason = f"integrator {integ.name} failed after t = {t:.6g} s: {e}"
                     break
             # X·X is finite iff every element is (an overflow to inf only sends it to the exact test)
-            if not (math.isfinite(X.dot(X) + XD.dot(XD)) or (np.isfinite(X).all() and np.isfinite(XD).all())):
+            if has_disc:
+                if not (isfinite(X.dot(X) + XD.dot(XD)) or (np.isfinite(X).all() and np.isfinite(XD).all())):
+                    bad = self._offender()
+                    stop_reason = f"non-finite state in component '{bad[0]}' after t = {t:.6g} s ({bad[1]})"
+                    break
+                copyto(XD_good, XD)
+            elif not (isfinite(X.dot(X)) or np.isfinite(X).all()):
                 bad = self._offender()
                 stop_reason = f"non-finite state in component '{bad[0]}' after t = {t:.6g} s ({bad[1]})"
                 break
-            np.copyto(X_good, X)
-            np.copyto(XD_good, XD)
+            copyto(X_good, X)
             t_good = t + dt
             if progress is not None and (k & 255) == 0:
                 now = time.perf_counter()

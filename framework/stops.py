@@ -19,18 +19,24 @@ class StopCondition:
     value: float
     reason: str
 
-    def hit(self) -> bool:
-        idx = self.index
-        if isinstance(idx, np.ndarray) and idx.size == 1:   # the usual "com z above": no temporaries
-            x = self.view[idx[0]]
-            return bool(x > self.value if self.op == "above" else x < self.value if self.op == "below"
-                        else abs(x) > self.value)
-        v = self.view[idx]
-        if self.op == "above":
-            return bool(np.any(v > self.value))
-        if self.op == "below":
-            return bool(np.any(v < self.value))
-        return bool(np.any(np.abs(v) > self.value))
+    def __post_init__(self):
+        # ``hit()``: True when the condition holds; made once for this buffer, index and bound
+        object.__setattr__(self, "hit", _test(self.view, self.index, self.op, self.value))
+
+
+def _test(view: np.ndarray, index, op: str, value: float):
+    if isinstance(index, np.ndarray) and index.size == 1:   # the usual "com z above": one element, no temporaries
+        item, i = view.item, int(index[0])
+        if op == "above":
+            return lambda: item(i) > value
+        if op == "below":
+            return lambda: item(i) < value
+        return lambda: abs(item(i)) > value
+    if op == "above":
+        return lambda: bool(np.any(view[index] > value))
+    if op == "below":
+        return lambda: bool(np.any(view[index] < value))
+    return lambda: bool(np.any(np.abs(view[index]) > value))
 
 
 def compile_stop(spec, ref: PortRef, buf, where) -> list[StopCondition]:

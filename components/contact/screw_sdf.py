@@ -54,6 +54,7 @@ derived from it once per robot (robot_screws.py), so link rows and DOF order agr
 
 from __future__ import annotations
 
+import functools
 from typing import Literal
 
 import numpy as np
@@ -63,13 +64,15 @@ from snakesim.framework import Component, Input, Output, Params, Uses
 from snakesim.components.materials import MaterialPatch, material_table
 from snakesim.components.multibody.robot_model import RobotModel
 
+from ..kernel_args import bind
 from ..terrain.analytic import PlaneTerrain
 from ..terrain.base import Terrain
 from .contact_set import ContactSet
 from .kernels import EV_FLOOR, MODES
 from .robot_screws import screw_layout
 from .screw_samples import ScrewContactSamples
-from .sdf_kernels import contact_wrenches, plane_contact_step, sample_points, screw_centres
+from .sdf_kernels import (Samples, SdfPorts, SdfWork, Surface, centres_step, plane_step, sample_step,
+                          seen_step, wrench_step)
 
 
 class ScrewSdfContactParams(Params):
@@ -117,138 +120,135 @@ class ScrewSdfContact(Component[ScrewSdfContactParams]):
                                        int(lay.hand[s]), lay.mount_R[s], lay.mount_p[s], p.phase)
                    for s in range(lay.ns)]
         self.samples = samples
-        self._points_B = np.ascontiguousarray(np.concatenate([s.points for s in samples]))
-        self._radial_B = np.ascontiguousarray(np.concatenate([s.radial for s in samples]))
-        self._ringc_B = np.ascontiguousarray(np.concatenate([s.points - s.radius * s.radial for s in samples]))
-        self._axis_B = np.ascontiguousarray(lay.mount_R[:, :, 0])
+        points_B = np.ascontiguousarray(np.concatenate([s.points for s in samples]))
+        radial_B = np.ascontiguousarray(np.concatenate([s.radial for s in samples]))
         counts = np.array([len(s) for s in samples], dtype=np.int64)
-        self._start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+        self.n_samples = int(counts.sum())
         self._sphere_r = np.sqrt(lay.radius ** 2 + (0.5 * lay.length) ** 2) + p.margin
-        n = self.n_samples = int(self._start[-1])
-        self._all = np.arange(lay.ns, dtype=np.int64)
-        self._active = np.zeros(lay.ns, dtype=np.int64)
-        self._plane = None
-        self._R = np.zeros((3, 3))
-        self._centres = np.zeros((lay.ns, 3))
-        self._pts, self._cpt, self._vel = np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3))
-        self._owner, self._sample = np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.int64)
-        self._force, self._fn = np.zeros((n, 3)), np.zeros(n)
-        self._dist, self._normal = np.zeros(n), np.zeros((n, 3))
-        self._mat = np.zeros(n, dtype=np.int64)
-        self._m = 0
-        self._mode = MODES[p.regularisation]
-        self._terrain, self._mats = None, None
-        self._plane_call = None
-        self._seen_poses, self._seen_vel = np.full((lay.nl, 7), np.nan), np.full((lay.nl, 6), np.nan)
-        self._seen_jv, self._seen_terrain = np.full(lay.nj, np.nan), None
-        # counters (tests and benches read them): evaluations, screws and samples sent to the narrow phase
-        self.stats = {"evaluations": 0, "screws_tested": 0, "samples_queried": 0}
-        self.bind_outputs(self.used_outputs)
+        self._samples = Samples(
+            broad_phase=p.broad_phase, sphere_r=self._sphere_r,
+            start=np.concatenate([[0], np.cumsum(counts)]).astype(np.int64), points_B=points_B,
+            mount_p=lay.mount_p, ringc_B=np.ascontiguousarray(np.concatenate([s.points - s.radius * s.radial
+                                                                              for s in samples])),
+            radial_B=radial_B, axis_B=np.ascontiguousarray(lay.mount_R[:, :, 0]), parent_row=lay.parent_row,
+            screw_row=lay.screw_row, radius=lay.radius, lead_angle=lay.lead_angle, hand=lay.hand,
+            spin_dof=lay.spin_dof, spin_mult=lay.spin_mult, v_eps=p.v_eps, mode=MODES[p.regularisation],
+            ev_floor=p.ev_floor)
 
     def _material_table(self, terrain: Terrain) -> np.ndarray:
-        if terrain is not self._terrain:
-            p = self.p
-            self._terrain, self._mats = terrain, material_table(terrain.materials, p.material, fn_max=p.fn_max,
-                                                                ev_floor=p.ev_floor, owner=self.name)
-            self._plane_call = None
-            # planes are queried in numba (no allocation); every other kind through Terrain.query
-            self._plane = None
-            if type(terrain) is PlaneTerrain and self.fast_plane:
-                self._plane = (np.array(terrain.origin, dtype=float), np.array(terrain.n, dtype=float),
-                               int(terrain.region_material[0]))
-        return self._mats
+        """The kernels' material table ([K, C, MU, EV_A, EV_B] per terrain material, ``material`` applied;
+        checked: ‖e_v‖ ≥ ev_floor up to fn_max), packed once per terrain object (the cache keeps it)."""
+        p = self.p
+        return material_table(terrain.materials, p.material, fn_max=p.fn_max, ev_floor=p.ev_floor, owner=self.name)
+
+    # -- this run's cache ------------------------------------------------------------------------
+    def make_cache(self, x, u, y):
+        """Per-sample scratch, the counters, and the kernels bound to this plan's port buffers (and, for
+        the contact set when the last evaluation saw other inputs, to scratch outputs)."""
+        return _Cache(self, u, y)
 
     # -- hot path --------------------------------------------------------------------------------
     def output(self, t, x, u, y):
-        terrain = u.terrain
-        if terrain is None:
-            raise ValueError(f"{self.name}: input 'terrain' carries no Terrain; connect a terrain component's "
-                             "'terrain' output to it")
-        mats = self._material_table(terrain)
-        lay = self.screws
-        poses = u.link_poses
-        plane = self._plane
-        p = self.p
-        st = self.stats
-        if plane is not None:
-            # the whole evaluation in one numba call (the same kernels as below, without the dispatches)
-            n_active, m, n_contact = plane_contact_step(*self._plane_args(u, y))
-            st["evaluations"] += 1
-            st["screws_tested"] += n_active
-            st["samples_queried"] += m
-            self._finish(m, n_contact, terrain, u, y)
-            return
-        if p.broad_phase:
-            screw_centres(poses, lay.parent_row, lay.mount_p, self._R, self._centres)
-            active = np.flatnonzero(terrain.distance_lower_bound(self._centres, self._sphere_r) <= 0.0)
-        else:
-            active = self._all
-        m = 0
-        if active.size:
-            m = sample_points(poses, active, active.size, self._start, self._points_B, lay.parent_row, self._R,
-                              self._pts, self._sample, self._owner)
-        st["evaluations"] += 1
-        st["screws_tested"] += int(active.size)
-        st["samples_queried"] += m
-        if m:
-            q = terrain.query(self._pts[:m])
-            self._dist[:m] = q.distance
-            self._normal[:m] = q.normal
-            self._mat[:m] = q.material
-        n_contact = contact_wrenches(m, self._dist, self._normal, self._mat, self._sample, self._owner, poses,
-                                     u.link_velocities, u.joint_v, self._ringc_B, self._radial_B, self._axis_B,
-                                     lay.parent_row, lay.screw_row, lay.radius, lay.lead_angle, lay.hand, lay.spin_dof,
-                                     lay.spin_mult, mats, p.v_eps, self._mode, p.ev_floor, self._R,
-                                     self._cpt, self._vel, self._force, self._fn, y.wrenches, y.screw_normal_force)
-        self._finish(m, n_contact, terrain, u, y)
-
-    def _plane_args(self, u, y):
-        """plane_contact_step's arguments, built once per (inputs, outputs) pair and terrain: the plan
-        hands the same namespaces every call and their arrays cannot be rebound (held, so ids stay unique)."""
-        c = self._plane_call
-        if c is None or c[0] is not u or c[1] is not y:
-            p, lay, plane = self.p, self.screws, self._plane
-            args = (p.broad_phase, plane[0], plane[1], plane[2], self._sphere_r, self._start, self._points_B,
-                    lay.mount_p, self._active, self._centres, self._pts, self._dist, self._normal, self._mat,
-                    self._sample, self._owner, u.link_poses, u.link_velocities, u.joint_v, self._ringc_B,
-                    self._radial_B, self._axis_B, lay.parent_row, lay.screw_row, lay.radius, lay.lead_angle, lay.hand,
-                    lay.spin_dof, lay.spin_mult, self._mats, p.v_eps, self._mode, p.ev_floor, self._R, self._cpt,
-                    self._vel, self._force, self._fn, y.wrenches, y.screw_normal_force)
-            c = self._plane_call = (u, y, args)
-        return c[2]
-
-    def _finish(self, m, n_contact, terrain, u, y):
-        self._m = m
-        y.contacts[0] = n_contact
-        y.normal_force[0] = y.screw_normal_force.sum()
-        if self._track_inputs:
-            # what this evaluation saw, so contact_set can tell whether it describes its inputs
-            np.copyto(self._seen_poses, u.link_poses)
-            np.copyto(self._seen_vel, u.link_velocities)
-            np.copyto(self._seen_jv, u.joint_v)
-            self._seen_terrain = terrain
-
-    def bind_outputs(self, used):
-        super().bind_outputs(used)
-        self._track_inputs = "contact_set" in used
+        c = u.cache
+        if u.terrain is not c.terrain:
+            c.use_terrain(self, u.terrain)
+        c.step()
 
     def calc_contact_set(self, t, x, u, y):
-        if not (u.terrain is self._seen_terrain and np.array_equal(u.link_poses, self._seen_poses)
-                and np.array_equal(u.link_velocities, self._seen_vel) and np.array_equal(u.joint_v, self._seen_jv)):
-            self.output(t, x, u, _Scratch(self.screws))     # the last evaluation was at other inputs
-        m = self._m
-        on = np.flatnonzero(self._dist[:m] < 0.0)
+        c = u.cache
+        if u.terrain is not c.terrain:
+            c.use_terrain(self, u.terrain)
+            c.step_scratch()
+        elif not c.seen():          # the last evaluation was at other inputs
+            c.step_scratch()
+        m = int(c.counts[4])
+        on = np.flatnonzero(c.distance[:m] < 0.0)
         y.contact_set = ContactSet(
-            t=float(t), points=self._cpt[on].copy(), normals=self._normal[on].copy(), forces=self._force[on].copy(),
-            normal_force=self._fn[on].copy(), depth=-self._dist[on], slip=self._vel[on].copy(),
-            link=self.screws.screw_row[self._owner[on]], material=self._mat[on].copy(),
+            t=float(t), points=c.point[on].copy(), normals=c.normal[on].copy(), forces=c.force[on].copy(),
+            normal_force=c.fn[on].copy(), depth=-c.distance[on], slip=c.vel[on].copy(),
+            link=self.screws.screw_row[c.owner[on]], material=c.material[on].copy(),
             link_names=self.robot.links)
 
 
-class _Scratch:
-    """Output buffers for an evaluation whose numeric results nobody reads."""
+_UNSET = object()
 
-    def __init__(self, lay):
-        self.wrenches = np.zeros((lay.nl, 6))
-        self.normal_force, self.contacts = np.zeros(1), np.zeros(1)
-        self.screw_normal_force = np.zeros(lay.ns)
+
+class _Cache:
+    """One run's contact scratch and bound kernels (see ScrewSdfContact.make_cache).
+
+    ``terrain`` and ``mats``: the terrain object in use and its material table; ``stats``: evaluations,
+    and screws and samples sent to the narrow phase (tests and benches)."""
+
+    __slots__ = ("comp", "terrain", "mats", "surface", "step", "step_scratch", "work", "ports", "scratch_ports", "seen",
+                 "centres_call", "sample_call", "counts", "active", "centres", "points", "distance", "normal",
+                 "material", "sample", "owner", "point", "vel", "force", "fn")
+
+    def __init__(self, comp: ScrewSdfContact, u, y):
+        lay, n = comp.screws, comp.n_samples
+        self.comp = comp
+        self.terrain = _UNSET                                      # not even None: output() checks it first
+        self.mats = self.surface = self.step = self.step_scratch = None
+        self.active = np.arange(lay.ns, dtype=np.int64)           # every screw, unless the broad phase says
+        self.centres = np.zeros((lay.ns, 3))
+        self.points, self.point, self.vel, self.force = (np.zeros((n, 3)) for _ in range(4))
+        self.distance, self.normal, self.fn = np.zeros(n), np.zeros((n, 3)), np.zeros(n)
+        self.material, self.sample, self.owner = (np.zeros(n, dtype=np.int64) for _ in range(3))
+        self.counts = np.zeros(5, dtype=np.int64)
+        self.counts[3] = lay.ns
+        self.work = SdfWork(active=self.active, centres=self.centres, points=self.points, distance=self.distance,
+                            normal=self.normal, material=self.material, sample=self.sample, owner=self.owner,
+                            R=np.zeros((3, 3)), point=self.point, vel=self.vel, force=self.force, fn=self.fn,
+                            counts=self.counts, track="contact_set" in comp.used_outputs,
+                            seen_poses=np.full((lay.nl, 7), np.nan), seen_vels=np.full((lay.nl, 6), np.nan),
+                            seen_joint_v=np.full(lay.nj, np.nan))
+        ins = dict(poses=u.link_poses, vels=u.link_velocities, joint_v=u.joint_v)
+        self.ports = SdfPorts(wrenches=y.wrenches, screw_fn=y.screw_normal_force, normal_force=y.normal_force,
+                              contacts=y.contacts, **ins)
+        self.scratch_ports = SdfPorts(wrenches=np.zeros((lay.nl, 6)), screw_fn=np.zeros(lay.ns),
+                                      normal_force=np.zeros(1), contacts=np.zeros(1), **ins)
+        self.seen = bind(seen_step, self.work, self.ports)
+        self.centres_call = bind(centres_step, comp._samples, self.work, self.ports)
+        self.sample_call = bind(sample_step, comp._samples, self.work, self.ports)
+
+    @property
+    def stats(self) -> dict:
+        return {"evaluations": int(self.counts[0]), "screws_tested": int(self.counts[1]),
+                "samples_queried": int(self.counts[2])}
+
+    def use_terrain(self, comp: ScrewSdfContact, terrain) -> None:
+        """The terrain-dependent records (material table; a plane's origin and normal, queried in numba;
+        every other kind through Terrain.query), for each new terrain object."""
+        if terrain is None:
+            raise ValueError(f"{comp.name}: input 'terrain' carries no Terrain; connect a terrain component's "
+                             "'terrain' output to it")
+        self.mats = mats = comp._material_table(terrain)
+        plane = type(terrain) is PlaneTerrain and comp.fast_plane
+        self.surface = Surface(origin=np.array(terrain.origin if plane else (0.0, 0.0, 0.0), dtype=float),
+                               n=np.array(terrain.n if plane else (0.0, 0.0, 1.0), dtype=float),
+                               region_material=int(terrain.region_material[0]) if plane else 0, mats=mats)
+        s = comp._samples
+        if plane:       # the whole evaluation in one numba call
+            self.step = bind(plane_step, s, self.work, self.ports, self.surface)
+            self.step_scratch = bind(plane_step, s, self.work, self.scratch_ports, self.surface)
+        else:
+            self.step = functools.partial(self._evaluate, bind(wrench_step, s, self.work, self.ports, self.surface))
+            self.step_scratch = functools.partial(self._evaluate, bind(wrench_step, s, self.work, self.scratch_ports,
+                                                                       self.surface))
+        self.terrain = terrain
+
+    def _evaluate(self, wrench) -> None:
+        """One evaluation on a terrain other than a plane: the broad phase, the samples' points,
+        Terrain.query, then the wrenches (``wrench``, bound to the outputs or to scratch)."""
+        terrain, comp = self.terrain, self.comp
+        if comp.p.broad_phase:
+            self.centres_call()
+            active = np.flatnonzero(terrain.distance_lower_bound(self.centres, comp._sphere_r) <= 0.0)
+            self.active[:active.size] = active
+            self.counts[3] = active.size
+        m = self.sample_call()
+        if m:
+            q = terrain.query(self.points[:m])
+            self.distance[:m] = q.distance
+            self.normal[:m] = q.normal
+            self.material[:m] = q.material
+        wrench()

@@ -14,8 +14,10 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 
+from ..kernel_args import record
 from .kernels_numba import add_wrench, point_contact_force
 
 K, C, MU, EV_A, EV_B = range(5)
@@ -196,3 +198,192 @@ def plane_contact_step(broad_phase, origin, n, region_material, sphere_r, start,
                                  spin_mult, mats, v_eps, mode, ev_floor, R, out_point, out_vel, out_force, out_fn,
                                  out_wrench, out_screw_fn)
     return n_active, m, n_contact
+
+
+@njit(cache=True)
+def _block_sum(a, lo, n):
+    """NumPy's pairwise_sum for n <= 128: a plain loop below 8, else 8 partial sums."""
+    if n < 8:
+        res = 0.0
+        for i in range(lo, lo + n):
+            res += a[i]
+        return res
+    r0, r1, r2, r3 = a[lo], a[lo + 1], a[lo + 2], a[lo + 3]
+    r4, r5, r6, r7 = a[lo + 4], a[lo + 5], a[lo + 6], a[lo + 7]
+    i = 8
+    while i < n - (n % 8):
+        r0 += a[lo + i]
+        r1 += a[lo + i + 1]
+        r2 += a[lo + i + 2]
+        r3 += a[lo + i + 3]
+        r4 += a[lo + i + 4]
+        r5 += a[lo + i + 5]
+        r6 += a[lo + i + 6]
+        r7 += a[lo + i + 7]
+        i += 8
+    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+    while i < n:
+        res += a[lo + i]
+        i += 1
+    return res
+
+
+# NumPy halves longer runs recursively; numba's disk cache cannot load a self-recursive function,
+# so the halving is unrolled six levels deep: enough for about 7000 elements (more raises).
+@njit(cache=True)
+def _halves0(a, lo, n):
+    if n > 128:
+        raise ValueError("np_sum: too many elements (more than about 7000)")
+    return _block_sum(a, lo, n)
+
+
+@njit(cache=True)
+def _halves1(a, lo, n):
+    if n <= 128:
+        return _block_sum(a, lo, n)
+    n2 = n // 2 - (n // 2) % 8
+    return _halves0(a, lo, n2) + _halves0(a, lo + n2, n - n2)
+
+
+@njit(cache=True)
+def _halves2(a, lo, n):
+    if n <= 128:
+        return _block_sum(a, lo, n)
+    n2 = n // 2 - (n // 2) % 8
+    return _halves1(a, lo, n2) + _halves1(a, lo + n2, n - n2)
+
+
+@njit(cache=True)
+def _halves3(a, lo, n):
+    if n <= 128:
+        return _block_sum(a, lo, n)
+    n2 = n // 2 - (n // 2) % 8
+    return _halves2(a, lo, n2) + _halves2(a, lo + n2, n - n2)
+
+
+@njit(cache=True)
+def _halves4(a, lo, n):
+    if n <= 128:
+        return _block_sum(a, lo, n)
+    n2 = n // 2 - (n // 2) % 8
+    return _halves3(a, lo, n2) + _halves3(a, lo + n2, n - n2)
+
+
+@njit(cache=True)
+def _halves5(a, lo, n):
+    if n <= 128:
+        return _block_sum(a, lo, n)
+    n2 = n // 2 - (n // 2) % 8
+    return _halves4(a, lo, n2) + _halves4(a, lo + n2, n - n2)
+
+
+@njit(cache=True)
+def _halves6(a, lo, n):
+    if n <= 128:
+        return _block_sum(a, lo, n)
+    n2 = n // 2 - (n // 2) % 8
+    return _halves5(a, lo, n2) + _halves5(a, lo + n2, n - n2)
+
+
+@njit(cache=True)
+def np_sum(a):
+    """``a.sum()`` of a contiguous float64 vector (up to about 7000 elements), bit for bit: NumPy's
+    pairwise summation (8 partial sums in blocks of up to 128, halves beyond;
+    tests/contact/test_sdf_kernels.py checks it against NumPy)."""
+    return 0.0 + _halves6(a, 0, a.size)       # the reduction starts from the identity: -0.0 sums to 0.0
+
+
+# -- the component's kernels, on argument records (kernel_args.py) ----------------------------------
+#   samples  Samples        the sample tables and contact parameters (built once per component)
+#   work     SdfWork        this run's per-sample scratch, the counters and what the last evaluation saw
+#   ports    SdfPorts       this run's input views and output buffers (or scratch outputs)
+#   surface  Surface        per terrain object: the material table and, for a plane, its origin,
+#                           normal and material
+# work.counts: [evaluations, screws tested, samples queried, active screws, samples m of the last
+# evaluation]; the generic path (Terrain.query in Python) sets the active screws and m there.
+
+Samples = record("Samples", ("broad_phase", "sphere_r", "start", "points_B", "mount_p", "ringc_B", "radial_B",
+                             "axis_B", "parent_row", "screw_row", "radius", "lead_angle", "hand", "spin_dof",
+                             "spin_mult", "v_eps", "mode", "ev_floor"))
+SdfWork = record("SdfWork", ("active", "centres", "points", "distance", "normal", "material", "sample", "owner", "R",
+                             "point", "vel", "force", "fn", "counts", "track", "seen_poses", "seen_vels",
+                             "seen_joint_v"))
+SdfPorts = record("SdfPorts", ("poses", "vels", "joint_v", "wrenches", "screw_fn", "normal_force", "contacts"))
+Surface = record("Surface", ("origin", "n", "region_material", "mats"))
+
+
+@njit(cache=True)
+def _finish(work, ports, n_active, m, n_contact):
+    c = work.counts
+    c[0] += 1
+    c[1] += n_active
+    c[2] += m
+    c[3] = n_active
+    c[4] = m
+    ports.contacts[0] = n_contact
+    ports.normal_force[0] = np_sum(ports.screw_fn)
+    if work.track:          # what this evaluation saw, so the contact set can tell whether it describes its inputs
+        work.seen_poses[:] = ports.poses
+        work.seen_vels[:] = ports.vels
+        work.seen_joint_v[:] = ports.joint_v
+
+
+@njit(cache=True)
+def plane_step(samples, work, ports, surface):
+    """One evaluation against a plane (plane_contact_step), outputs and counters included."""
+    s, w, io, f = samples, work, ports, surface
+    n_active, m, n_contact = plane_contact_step(
+        s.broad_phase, f.origin, f.n, f.region_material, s.sphere_r, s.start, s.points_B, s.mount_p, w.active,
+        w.centres, w.points, w.distance, w.normal, w.material, w.sample, w.owner, io.poses, io.vels, io.joint_v,
+        s.ringc_B, s.radial_B, s.axis_B, s.parent_row, s.screw_row, s.radius, s.lead_angle, s.hand, s.spin_dof,
+        s.spin_mult, f.mats, s.v_eps, s.mode, s.ev_floor, w.R, w.point, w.vel, w.force, w.fn, io.wrenches,
+        io.screw_fn)
+    _finish(w, io, n_active, m, n_contact)
+
+
+@njit(cache=True)
+def centres_step(samples, work, ports):
+    """Broad phase, generic terrain: every screw's centre into work.centres."""
+    screw_centres(ports.poses, samples.parent_row, samples.mount_p, work.R, work.centres)
+
+
+@njit(cache=True)
+def sample_step(samples, work, ports):
+    """World points of the active screws' samples (work.active[:counts[3]]) into work.points;
+    sets and returns m."""
+    n_active = work.counts[3]
+    m = 0
+    if n_active:
+        m = sample_points(ports.poses, work.active, n_active, samples.start, samples.points_B, samples.parent_row,
+                          work.R, work.points, work.sample, work.owner)
+    work.counts[4] = m
+    return m
+
+
+@njit(cache=True)
+def wrench_step(samples, work, ports, surface):
+    """Forces and wrenches of the m samples queried (distance, normal, material filled in), outputs
+    and counters."""
+    s, w, io = samples, work, ports
+    m = w.counts[4]
+    n_contact = contact_wrenches(m, w.distance, w.normal, w.material, w.sample, w.owner, io.poses, io.vels,
+                                 io.joint_v, s.ringc_B, s.radial_B, s.axis_B, s.parent_row, s.screw_row, s.radius,
+                                 s.lead_angle, s.hand, s.spin_dof, s.spin_mult, surface.mats, s.v_eps, s.mode,
+                                 s.ev_floor, w.R, w.point, w.vel, w.force, w.fn, io.wrenches, io.screw_fn)
+    _finish(w, io, w.counts[3], m, n_contact)
+
+
+@njit(cache=True)
+def seen_step(work, ports):
+    """True if the last evaluation saw exactly these inputs (bit for bit)."""
+    return _same(work.seen_poses, ports.poses) and _same(work.seen_vels, ports.vels) \
+        and _same(work.seen_joint_v, ports.joint_v)
+
+
+@njit(cache=True)
+def _same(a, b):
+    x, y = a.ravel().view(np.uint64), b.ravel().view(np.uint64)
+    for i in range(x.size):
+        if x[i] != y[i]:
+            return False
+    return True

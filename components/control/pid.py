@@ -55,7 +55,8 @@ from snakesim.framework import Component, ContinuousState, Input, Output, Params
 from snakesim.components.port_roles import JOINT_EFFORTS, JOINT_POSITIONS, JOINT_VELOCITIES
 
 from .joint_selection import per_joint
-from .pid_kernel import pid_law
+from ..kernel_args import bind
+from .pid_kernel import Gains, PidRun, pid_step
 
 Mode = Literal["position", "velocity", "off"]
 
@@ -148,10 +149,9 @@ class JointPid(Component[JointPidParams]):
                                  "(or give the component a rate for the discrete form)")
             self._inv_tf = np.where(self._tf > 0, 1.0 / np.where(self._tf > 0, self._tf, 1.0), 0.0)
             self._T, self._a = 0.0, np.zeros(self._nj)  # the continuous law has no sample period
-        n = self._nj
-        # the law's per-joint results (pid_kernel.pid_law), reused by output/derivative/update
-        self._tau, self._e, self._dint, self._zrate = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n)
-        self._call = None
+        self._gains = Gains(pos=self._pos, wrap=self._cont, kp=self._kp, ki=self._ki, kd=self._kd, tf=self._tf,
+                            tmax=self._tmax, inv_tf=self._inv_tf, a=self._a, T=float(self._T),
+                            discrete=self._discrete, clamp=self._clamp)
 
     def continuous_state(self):
         if self._discrete:
@@ -165,33 +165,34 @@ class JointPid(Component[JointPidParams]):
             return None
         return np.zeros(2 * self._nj + 1)       # [I, z, started]
 
-    # -- the law (pid_kernel.pid_law: one numba call per evaluation) ---------------------------
-    def _law(self, x, u):
-        # the argument tuple is built once per (state, inputs) pair: the plan hands the same objects
-        # every call and an input namespace's arrays cannot be rebound (held, so ids stay unique)
-        c = self._call
-        if c is None or c[0] is not x or c[1] is not u:
-            c = self._call = (x, u, (self._pos, self._cont, self._kp, self._ki, self._kd, self._tf, self._tmax,
-                                     self._inv_tf, self._a, self._T, self._discrete, self._clamp, u.setpoint,
-                                     u.rate_ref, u.tau_ff, u.q, u.v, x, self._tau, self._e, self._dint, self._zrate))
-        pid_law(*c[2])
+    # -- this run's cache: the law bound to the plan's buffers --------------------------------------
+    def make_cache(self, x, u, y):
+        """The law's per-joint results (pid_kernel.pid_law) and two bound calls: ``output`` writes tau
+        and the error straight into the output buffers, ``law`` into scratch (update() must not
+        touch the held outputs)."""
+        n = self._nj
+        dint, zrate = np.zeros(n), np.zeros(n)
+        ins = dict(setpoint=u.setpoint, rate_ref=u.rate_ref, tau_ff=u.tau_ff, q=u.q, v=u.v, x=x, dint=dint,
+                   zrate=zrate)
+        return _Cache(dint, zrate, bind(pid_step, self._gains, PidRun(tau=y.tau, err=y.error, **ins)),
+                      bind(pid_step, self._gains, PidRun(tau=np.zeros(n), err=np.zeros(n), **ins)))
 
     def output(self, t, x, u, y):
-        self._law(x, u)
-        y.tau[:] = self._tau
-        y.error[:] = self._e
+        u.cache.output()
 
     def derivative(self, t, x, u, dx):
         # output() ran on this (t, x, u) just before (framework contract): reuse its law results
+        c = u.cache
         n = self._nj
-        dx[:n] = self._dint
-        dx[n:] = self._zrate
+        dx[:n] = c.dint
+        dx[n:] = c.zrate
 
     def update(self, t, xd, u):
+        c = u.cache
         n = self._nj
-        self._law(xd, u)
-        xd[:n] += self._T * self._dint
-        xd[n:2 * n] = self._zrate
+        c.law()
+        xd[:n] += self._T * c.dint
+        xd[n:2 * n] = c.zrate
         xd[2 * n] = 1.0
 
     # -- introspection ------------------------------------------------------------------------
@@ -202,3 +203,10 @@ class JointPid(Component[JointPidParams]):
             raise KeyError(f"{self.name}: no DOF joint '{joint}'; joints: {', '.join(self.robot.joints)}")
         return dict(self.gains_table[i])
 
+
+
+class _Cache:
+    __slots__ = ("dint", "zrate", "output", "law")
+
+    def __init__(self, dint, zrate, output, law):
+        self.dint, self.zrate, self.output, self.law = dint, zrate, output, law

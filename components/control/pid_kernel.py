@@ -19,6 +19,8 @@ import math
 
 from numba import njit
 
+from ..kernel_args import record
+
 TWO_PI = 2.0 * math.pi
 
 
@@ -57,3 +59,18 @@ def pid_law(pos, wrap, kp, ki, kd, tf, tmax, inv_tf, a, T, discrete, clamp, setp
             zrate[i] = d if pos[i] else z + T * d
         else:
             zrate[i] = ((r - z) if pos[i] else (e - z)) * inv_tf[i]
+
+
+# -- on argument records (kernel_args.py) ------------------------------------------------------------
+#   gains  Gains   the component's constants (per joint: mode, wrap, gains, filter, limits)
+#   run    PidRun  this run's input views, state view x, and where the law writes tau, err, dint, zrate
+
+Gains = record("Gains", ("pos", "wrap", "kp", "ki", "kd", "tf", "tmax", "inv_tf", "a", "T", "discrete", "clamp"))
+PidRun = record("PidRun", ("setpoint", "rate_ref", "tau_ff", "q", "v", "x", "tau", "err", "dint", "zrate"))
+
+
+@njit(cache=True)
+def pid_step(gains, run):
+    g, r = gains, run
+    pid_law(g.pos, g.wrap, g.kp, g.ki, g.kd, g.tf, g.tmax, g.inv_tf, g.a, g.T, g.discrete, g.clamp, r.setpoint,
+            r.rate_ref, r.tau_ff, r.q, r.v, r.x, r.tau, r.err, r.dint, r.zrate)

@@ -104,8 +104,22 @@ class ScrewSchedule(Component[ScrewScheduleParams]):
         self._table = np.array([base] + [phase_vector(names, s, base, groups, f"{self.name}: speeds[{k}]")
                                          for k, s in enumerate(p.speeds)])
 
+    def make_cache(self, x, u, y):
+        """The phase the outputs hold (-1: none yet): they are rewritten only when it changes."""
+        return _Held()
+
     def output(self, t, x, u, y):
-        k = int(np.searchsorted(self._t, t, side="right"))
-        y.setpoint[:] = self._table[k]
-        y.rate[:] = 0.0
-        y.phase[0] = k - 1
+        k = int(self._t.searchsorted(t, side="right"))
+        held = u.cache
+        if k != held.k:
+            y.setpoint[:] = self._table[k]
+            y.rate[:] = 0.0
+            y.phase[0] = k - 1
+            held.k = k
+
+
+class _Held:
+    __slots__ = ("k",)
+
+    def __init__(self):
+        self.k = -1

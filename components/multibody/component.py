@@ -52,6 +52,8 @@ Cost: Pinocchio 4.1 allocates O(nv³) derivative tensors in every Data: about
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 from typing import Literal
 
 import numpy as np
@@ -145,7 +147,6 @@ class Multibody(Component[MultibodyParams]):
         if not np.all(np.isfinite(p.gravity)):
             raise ValueError(f"{self.name}: gravity {p.gravity} must be finite")
         robot = self.robot = RobotModel.of(RobotSource(**{k: getattr(p, k) for k in RobotSource.model_fields}))
-        self._k = kernels
         self.mode, self.mode_reason = choose_mode(p.screw_pairs, robot.groups)
         self.armature_user = joint_values.armature(robot, p)
         self.damping_user = joint_values.damping(robot, p)
@@ -155,7 +156,7 @@ class Multibody(Component[MultibodyParams]):
             raise AssertionError("internal: model layout differs from the port layout")
         joint_values.check_mass_matrix(robot, self.dyn, self.name)
         self._ta = tree_arrays(robot.tree, model)
-        nl, nq, nv = robot.nl, robot.nq, robot.nv
+        nq, nv = robot.nq, robot.nv
         self._nq, self._nv = nq, nv
         self._dof_v = np.array([model.joints[model.getJointId(j)].idx_v for j in robot.joints], dtype=np.int64)
         jq = [model.joints[model.getJointId(j)] for j in robot.joints]
@@ -166,29 +167,14 @@ class Multibody(Component[MultibodyParams]):
         self._arm_v[self._dof_v] = [self.armature_user.get(j, 0.0) for j in robot.joints]
         # every link but the root has a parent joint to cut across
         self._cut_links = np.array([i for i, ln in enumerate(robot.links) if ln != robot.tree.root], dtype=np.int64)
-        # kinematics buffers (state-dependent), reused across calls
-        self._R = np.zeros((nl, 3, 3))
-        self._p = np.zeros((nl, 3))
-        self._w = np.zeros((nl, 3))
-        self._vo = np.zeros((nl, 3))
-        self._aw = np.zeros((nl, 3))
-        self._thd = np.zeros(nl)
-        self._alpha = np.zeros((nl, 3))
-        self._ao = np.zeros((nl, 3))
-        self._S = np.zeros((nl, 6))
-        self._T = np.zeros(nv)
-        self._qdd = np.zeros(nv)
-        self._kin_key = None   # x.tobytes() of the state the kinematics buffers hold
-        self._g = np.array(p.gravity, dtype=float)
-        self._g_param = self._g.copy()
-        self._scale_mode = p.gravity_input == "scale"
-        self._set_gravity(self._g)
-        self._g_key = None     # the gravity input the model's gravity was last set from
-        self._pending = None   # byte keys of (x, tau, W, g) the last output() solved for
-        self._energy_scratch = np.zeros(2)
-        self._state_call = self._force_call = None     # kernel argument tuples, see _state_args
-        self._aba = self._pin.aba if self.mode != "mimic_crba" else None
-        self.bind_outputs(self.used_outputs)
+        self._g_param = np.array(p.gravity, dtype=float)
+        self.dyn.model.gravity.linear[:] = self._g_param
+        ta = self._ta
+        self._tree = kernels.Tree(
+            order=ta.order, parent=ta.parent, jtype=ta.jtype, R0=ta.R0, p0=ta.p0, axis=ta.axis, qidx=ta.qidx,
+            qkind=ta.qkind, vidx=ta.vidx, mult=ta.mult, offset=ta.offset, mass=ta.mass, com=ta.com,
+            inertia=ta.inertia, jq_idx=self._jq_idx, jq_cs=self._jq_cs, dof_v=self._dof_v, damping=self._damp,
+            cut_links=self._cut_links, g_param=self._g_param, gravity_scale=p.gravity_input == "scale")
         self._report = None
         self._x0 = joint_values.initial_state(robot, p, model)   # validated here, so errors name the component
 
@@ -215,135 +201,48 @@ class Multibody(Component[MultibodyParams]):
         """
         k[:6] = np.linalg.solve(self._pin.Jexp6(np.ascontiguousarray(u[:6])), k[:6])
 
-    def bind_outputs(self, used):
-        """Unread outputs cost nothing: the accelerations group and the optional state outputs are skipped."""
-        super().bind_outputs(used)
-        self._want_qv = bool(used & {"q", "v"})
-        self._want_rot = "link_rotations" in used
-        self._want_acc = bool(used & {"a", "link_accelerations", "joint_wrenches"})
+    # -- this run's cache -----------------------------------------------------------------------
+    def make_cache(self, x, u, y):
+        """Kinematics and solver scratch, the kernels bound to this plan's state and port buffers,
+        and a copy of the Pinocchio model whose gravity follows the gravity input."""
+        return _Cache(self, x, u, y)
 
-    # -- hot path -----------------------------------------------------------------------
-    # Caches are keyed by the bytes of their inputs (cheaper than np.array_equal, and exact):
-    # the state-output node and the derivative see the same x within one evaluation.
-    def _set_gravity(self, g):
-        self._g[:] = g
-        self.dyn.model.gravity.linear[:] = g
-
-    def _gravity_of(self, gin) -> np.ndarray:
-        key = gin.tobytes()
-        if key == self._g_key:
-            return self._g
-        if self._scale_mode:
-            s = gin[0]
-            g = self._g_param if s != s else s * self._g_param
-        else:
-            g = self._g_param if np.isnan(gin).any() else gin
-        if not np.array_equal(g, self._g):
-            self._set_gravity(g)
-        self._g_key = key
-        return self._g
-
-    def _kinematics(self, x):
-        key = x.tobytes()
-        if key == self._kin_key:
-            return
-        t = self._ta
-        self._k.forward_kinematics(t.order, t.parent, t.jtype, t.R0, t.p0, t.axis, t.qidx, t.qkind, t.vidx,
-                                   t.mult, t.offset, x[:self._nq], x[self._nq:],
-                                   self._R, self._p, self._w, self._vo, self._aw, self._thd)
-        self._kin_key = key
-
-    # Kernel argument tuples, built once per caller: the plan hands the same state view and
-    # port namespaces every call (a namespace's arrays cannot be rebound), so a call costs two
-    # identity tests instead of some thirty attribute look-ups. Held references keep ids unique.
-    def _state_args(self, x, y):
-        c = self._state_call
-        if c is None or c[0] is not x or c[1] is not y:
-            t_, q, v = self._ta, x[:self._nq], x[self._nq:]
-            args = (t_.order, t_.parent, t_.jtype, t_.R0, t_.p0, t_.axis, t_.qidx, t_.qkind, t_.vidx, t_.mult,
-                    t_.offset, q, v, self._R, self._p, self._w, self._vo, self._aw, self._thd,
-                    self._jq_idx, self._jq_cs, self._dof_v, y.joint_q, y.joint_v, y.link_poses, y.link_velocities)
-            c = self._state_call = (x, y, args)
-        return c[2]
-
-    def _force_args(self, x, u):
-        c = self._force_call
-        if c is None or c[0] is not x or c[1] is not u:
-            t_, q, v = self._ta, x[:self._nq], x[self._nq:]
-            args = (self._dof_v, u.tau, self._damp, v, t_.order, t_.parent, t_.jtype, t_.vidx, t_.mult,
-                    self._R, self._p, self._aw, u.wrenches, self._S, self._T)
-            c = self._force_call = (x, u, args, q, v)
-        return c
-
-    def _solve(self, x, u) -> np.ndarray:
-        """Generalised accelerations at (x, inputs) into self._qdd."""
-        _, _, args, q, v = self._force_args(x, u)
-        self._gravity_of(u.gravity)
-        loaded = u.wrenches.any()
-        if loaded:
-            self._kinematics(x)
-        self._k.joint_forces(loaded, *args)
-        self._qdd[:] = self._aba(self.dyn.model, self.dyn.data, q, v, self._T) if self._aba is not None \
-            else self.dyn.forward(q, v, self._T)
-        return self._qdd
-
-    def _inputs_key(self, x, u):
-        return x.tobytes(), u.tau.tobytes(), u.wrenches.tobytes(), u.gravity.tobytes()
-
+    # -- hot path -------------------------------------------------------------------------------
+    # derivative() follows output() on the same (t, x, u) (framework contract): output() solves,
+    # derivative() copies. The kinematics kernels check themselves which state they belong to.
     def derivative(self, t, x, u, dx):
+        c = u.cache
         nv = self._nv
-        dx[:nv] = x[self._nq:]
-        if self._pending is not None:
-            pend, self._pending = self._pending, None
-            if pend == self._inputs_key(x, u):
-                dx[nv:] = self._qdd
-                return
-        dx[nv:] = self._solve(x, u)
+        dx[:nv] = c.v
+        dx[nv:] = c.a
+
+    def output(self, t, x, u, y):
+        c = u.cache
+        if x is not c.x:
+            raise _not_the_state(self.name)
+        if c.force():
+            c.model.gravity.linear[:] = c.g
+        c.a = a = c.solve()                         # derivative() reads it
+        if c.want_acc:
+            c.qdd[:] = a
+            c.accelerations()
 
     # -- outputs ---------------------------------------------------------------------------
     def calc_state(self, t, x, u, y):
-        nq = self._nq
-        q, v = x[:nq], x[nq:]
-        if self._want_qv:
-            y.q[:] = q
-            y.v[:] = v
-        self._k.state_outputs(*self._state_args(x, y))
-        self._kin_key = x.tobytes()
-        if self._want_rot:
-            y.link_rotations[:] = self._R
+        c = u.cache
+        if x is not c.x:
+            raise _not_the_state(self.name)
+        c.state()
 
     def calc_momentum(self, t, x, u, y):
-        self._kinematics(x)
-        t_ = self._ta
-        self._k.momentum_energy(self._R, self._p, self._w, self._vo, t_.mass, t_.com, t_.inertia, self._g_param,
-                                y.momentum, y.com, self._energy_scratch)
+        u.cache.momentum()
 
     def calc_energy(self, t, x, u, y):
-        g = self._gravity_of(u.gravity)
-        self._kinematics(x)
-        t_ = self._ta
-        h, c = np.zeros(6), np.zeros(3)
-        self._k.momentum_energy(self._R, self._p, self._w, self._vo, t_.mass, t_.com, t_.inertia, g, h, c, y.energy)
-        v = x[self._nq:]
-        y.energy[0] += 0.5 * float(self._arm_v @ (v * v))
-
-    def output(self, t, x, u, y):
-        if not self._want_acc:
-            return      # nobody reads a, link_accelerations or joint_wrenches: derivative() solves alone
-        qdd = self._solve(x, u)
-        self._pending = self._inputs_key(x, u)
-        y.a[:] = qdd
-        self._kinematics(x)
-        t_ = self._ta
-        k = self._k
-        nq = self._nq
-        k.accelerations(t_.order, t_.parent, t_.jtype, t_.vidx, t_.mult, self._R, self._p, self._w, self._aw,
-                        self._thd, x[nq:], qdd, self._alpha, self._ao)
-        y.link_accelerations[:, :3] = self._ao
-        y.link_accelerations[:, 3:] = self._alpha
-        if "joint_wrenches" in self.used_outputs:
-            k.cut_wrenches(t_.order, t_.parent, self._R, self._p, self._w, self._alpha, self._ao, t_.mass, t_.com,
-                           t_.inertia, u.wrenches, self._g, self._S, self._cut_links, y.joint_wrenches)
+        c = u.cache
+        if c.energy():
+            c.model.gravity.linear[:] = c.g
+        np.multiply(c.v, c.v, out=c.vv)
+        y.energy[0] += 0.5 * float(self._arm_v @ c.vv)
 
     # -- introspection ------------------------------------------------------------------------
     def build_report(self):
@@ -366,3 +265,52 @@ class Multibody(Component[MultibodyParams]):
     def link_index(self, link: str) -> int:
         """Row of a link in wrenches / link_poses / link_velocities / link_accelerations."""
         return self.robot.link_index(link)
+
+
+def _not_the_state(name: str) -> ValueError:
+    return ValueError(f"{name}: evaluated at another state array than the one its cache was made for (the "
+                      "plan's state view; a Harness's h.x): write the state into that array instead")
+
+
+class _Cache:
+    """One run's multibody scratch and bound kernels (see Multibody.make_cache).
+
+    The Pinocchio Data is the component's: a workspace every solve overwrites whole, one per
+    component because Pinocchio 4.1's Data holds O(nv³) derivative tensors (2 GB at 100 modules)."""
+
+    __slots__ = ("x", "q", "v", "a", "qdd", "g", "vv", "fresh", "model", "want_acc", "kin", "ports", "state", "force",
+                 "solve", "accelerations", "momentum", "energy")
+
+    def __init__(self, mb: Multibody, x, u, y):
+        from . import kernels as k
+        from ..kernel_args import bind
+
+        nl, nq, nv = mb.robot.nl, mb._nq, mb._nv
+        used = mb.used_outputs
+        q, v = x[:nq], x[nq:]
+        self.x, self.q, self.v = x, q, v
+        self.a = self.qdd = np.zeros(nv)      # a: the last solve's accelerations; qdd: the kernels' copy
+        self.g = mb._g_param.copy()
+        self.vv, T = np.zeros(nv), np.zeros(nv)
+        self.model = model = mb._pin.Model(mb.dyn.model)          # its gravity is this run's
+        self.want_acc = bool(used & {"a", "link_accelerations", "joint_wrenches"})
+        z3 = lambda: np.zeros((nl, 3))  # noqa: E731
+        self.fresh = np.zeros(1, dtype=bool)                      # the kinematics belong to at_q, at_v
+        self.kin = k.Kin(q=q, v=v, at_q=np.zeros(nq), at_v=np.zeros(nv), fresh=self.fresh,
+                         R=np.zeros((nl, 3, 3)), p=z3(), w=z3(), vo=z3(), aw=z3(), thd=np.zeros(nl), alpha=z3(),
+                         ao=z3(), S=np.zeros((nl, 6)), T=T, qdd=self.qdd, g=self.g, h_scratch=np.zeros(6),
+                         c_scratch=np.zeros(3), e_scratch=np.zeros(2))
+        self.ports = k.Ports(tau=u.tau, wrenches=u.wrenches, gravity=u.gravity, q=y.q, v=y.v, joint_q=y.joint_q,
+                             joint_v=y.joint_v, link_poses=y.link_poses, link_velocities=y.link_velocities,
+                             link_rotations=y.link_rotations, momentum=y.momentum, com=y.com, energy=y.energy, a=y.a,
+                             link_accelerations=y.link_accelerations, joint_wrenches=y.joint_wrenches,
+                             want_qv=bool(used & {"q", "v"}), want_rot="link_rotations" in used,
+                             want_cut="joint_wrenches" in used)
+        args = (mb._tree, self.kin, self.ports)
+        self.state, self.force = bind(k.state_step, *args), bind(k.force_step, *args)
+        self.accelerations, self.momentum = bind(k.acceleration_step, *args), bind(k.momentum_step, *args)
+        self.energy = bind(k.energy_step, *args)
+        if mb.mode != "mimic_crba":
+            self.solve = functools.partial(mb._pin.aba, model, mb.dyn.data, q, v, T)
+        else:
+            self.solve = functools.partial(dataclasses.replace(mb.dyn, model=model).forward, q, v, T)

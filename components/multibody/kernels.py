@@ -26,6 +26,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ..kernel_args import record
+
 ROOT, FIXED, REVOLUTE = 0, 1, 2
 
 
@@ -335,3 +337,145 @@ def joint_forces(with_wrenches, dof_v, tau, damping, v, order, parent, jtype, vi
         T[dof_v[j]] = tau[j] - damping[j] * v[dof_v[j]]
     if with_wrenches:
         generalized_forces(order, parent, jtype, vidx, mult, R, p, aw, W, S, T)
+
+
+# -- the component's kernels, on argument records (kernel_args.py) --------------------------------
+#
+#   tree   Tree    constants of the robot and the dynamics model (built once per component)
+#   kin    Kin     this run's state views q, v and kinematics scratch (built in make_cache)
+#   ports  Ports   this run's input views and output buffers, and which outputs are read
+#
+# The kinematics in kin (R, p, w, vo, aw, thd) belong to the state recorded in kin.at_q,
+# kin.at_v when kin.fresh[0]: a kernel that needs them at the current state recomputes them
+# only if the state differs bit for bit (the state outputs computed them there already in
+# the usual evaluation order; a Harness, a sampled output group or an unread state output
+# may leave them at another state).
+
+Tree = record("Tree", ("order", "parent", "jtype", "R0", "p0", "axis", "qidx", "qkind", "vidx", "mult", "offset",
+                       "mass", "com", "inertia", "jq_idx", "jq_cs", "dof_v", "damping", "cut_links", "g_param",
+                       "gravity_scale"))
+Kin = record("Kin", ("q", "v", "at_q", "at_v", "fresh", "R", "p", "w", "vo", "aw", "thd", "alpha", "ao", "S", "T",
+                     "qdd", "g", "h_scratch", "c_scratch", "e_scratch"))
+Ports = record("Ports", ("tau", "wrenches", "gravity", "q", "v", "joint_q", "joint_v", "link_poses",
+                         "link_velocities", "link_rotations", "momentum", "com", "energy", "a", "link_accelerations",
+                         "joint_wrenches", "want_qv", "want_rot", "want_cut"))
+
+
+@njit(cache=True)
+def _same_bits(a, b):
+    x, y = a.view(np.uint64), b.view(np.uint64)
+    for i in range(x.size):
+        if x[i] != y[i]:
+            return False
+    return True
+
+
+@njit(cache=True)
+def _kinematics(tree, kin):
+    """forward_kinematics into kin at kin.q, kin.v, and remember that state."""
+    t = tree
+    forward_kinematics(t.order, t.parent, t.jtype, t.R0, t.p0, t.axis, t.qidx, t.qkind, t.vidx, t.mult, t.offset,
+                       kin.q, kin.v, kin.R, kin.p, kin.w, kin.vo, kin.aw, kin.thd)
+    kin.at_q[:] = kin.q
+    kin.at_v[:] = kin.v
+    kin.fresh[0] = True
+
+
+@njit(cache=True)
+def _ensure_kinematics(tree, kin):
+    if not (kin.fresh[0] and _same_bits(kin.q, kin.at_q) and _same_bits(kin.v, kin.at_v)):
+        _kinematics(tree, kin)
+
+
+@njit(cache=True)
+def _gravity(tree, kin, gin):
+    """The gravity the input asks for (NaN: the parameter) into kin.g; True if it changed."""
+    g, gp = kin.g, tree.g_param
+    if tree.gravity_scale:
+        s = gin[0]
+        want0, want1, want2 = (gp[0], gp[1], gp[2]) if s != s else (s * gp[0], s * gp[1], s * gp[2])
+    elif np.isnan(gin).any():
+        want0, want1, want2 = gp[0], gp[1], gp[2]
+    else:
+        want0, want1, want2 = gin[0], gin[1], gin[2]
+    if want0 == g[0] and want1 == g[1] and want2 == g[2]:
+        return False
+    g[0], g[1], g[2] = want0, want1, want2
+    return True
+
+
+@njit(cache=True)
+def state_step(tree, kin, ports):
+    """The state outputs (kinematics, joint values, link poses and velocities, and q, v and the
+    link rotations when read) at kin.q, kin.v."""
+    t = tree
+    state_outputs(t.order, t.parent, t.jtype, t.R0, t.p0, t.axis, t.qidx, t.qkind, t.vidx, t.mult, t.offset,
+                  kin.q, kin.v, kin.R, kin.p, kin.w, kin.vo, kin.aw, kin.thd, t.jq_idx, t.jq_cs, t.dof_v,
+                  ports.joint_q, ports.joint_v, ports.link_poses, ports.link_velocities)
+    kin.at_q[:] = kin.q
+    kin.at_v[:] = kin.v
+    kin.fresh[0] = True
+    if ports.want_qv:
+        ports.q[:] = kin.q
+        ports.v[:] = kin.v
+    if ports.want_rot:
+        ports.link_rotations[:] = kin.R
+
+
+@njit(cache=True)
+def force_step(tree, kin, ports):
+    """Gravity from its input into kin.g, and the generalised force kin.T (joint torques, damping,
+    the link wrenches through the kinematics of this state). Returns True if gravity changed."""
+    changed = _gravity(tree, kin, ports.gravity)
+    W = ports.wrenches
+    loaded = False
+    for i in range(W.shape[0]):
+        for j in range(6):
+            if W[i, j] != 0.0:
+                loaded = True
+    if loaded:
+        _ensure_kinematics(tree, kin)
+    t = tree
+    joint_forces(loaded, t.dof_v, ports.tau, t.damping, kin.v, t.order, t.parent, t.jtype, t.vidx, t.mult,
+                 kin.R, kin.p, kin.aw, W, kin.S, kin.T)
+    return changed
+
+
+@njit(cache=True)
+def acceleration_step(tree, kin, ports):
+    """From kin.qdd (the solved accelerations): a, the link accelerations and, when read, the
+    joint wrenches (kinematics of this state: force_step ran first)."""
+    t = tree
+    _ensure_kinematics(tree, kin)
+    ports.a[:] = kin.qdd
+    accelerations(t.order, t.parent, t.jtype, t.vidx, t.mult, kin.R, kin.p, kin.w, kin.aw, kin.thd, kin.v, kin.qdd,
+                  kin.alpha, kin.ao)
+    la = ports.link_accelerations
+    for l in range(la.shape[0]):
+        for i in range(3):
+            la[l, i] = kin.ao[l, i]
+            la[l, 3 + i] = kin.alpha[l, i]
+    if ports.want_cut:
+        cut_wrenches(t.order, t.parent, kin.R, kin.p, kin.w, kin.alpha, kin.ao, t.mass, t.com, t.inertia,
+                     ports.wrenches, kin.g, kin.S, t.cut_links, ports.joint_wrenches)
+
+
+@njit(cache=True)
+def momentum_step(tree, kin, ports):
+    """Momentum and centre of mass (the energy it also computes, with the parameter gravity, is dropped)."""
+    _ensure_kinematics(tree, kin)
+    t = tree
+    momentum_energy(kin.R, kin.p, kin.w, kin.vo, t.mass, t.com, t.inertia, t.g_param, ports.momentum, ports.com,
+                    kin.e_scratch)
+
+
+@njit(cache=True)
+def energy_step(tree, kin, ports):
+    """Link kinetic and potential energy (gravity from its input into kin.g) into ports.energy; the
+    component adds the rotors' kinetic energy. Returns True if gravity changed."""
+    changed = _gravity(tree, kin, ports.gravity)
+    _ensure_kinematics(tree, kin)
+    t = tree
+    momentum_energy(kin.R, kin.p, kin.w, kin.vo, t.mass, t.com, t.inertia, kin.g, kin.h_scratch, kin.c_scratch,
+                    ports.energy)
+    return changed

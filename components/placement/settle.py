@@ -204,7 +204,10 @@ class Settle(Component[SettleParams]):
         self._distal = np.array([[links[r] in b for r in lay.parent_row] for b in beyond], dtype=float)
         self._T = 1.0 / self.rate
         self._need = int(np.ceil(p.min_contact_fraction * lay.ns - 1e-9))
-        self._seen = (None, np.full((robot.nl, 7), np.nan), None)    # (terrain, poses, nearest) of output()
+
+    def make_cache(self, x, u, y):
+        """What output() saw (for calc_attraction at the same inputs) and the latched pre-load."""
+        return _Cache(self.robot.nl)
 
     def discrete_state(self):
         # times < 0: not yet
@@ -246,7 +249,8 @@ class Settle(Component[SettleParams]):
         return n, c + self._radius[first, None] * e
 
     def _preload_torques(self, poses, terrain):
-        """τ_k = Σ_s [s beyond k] â_k · ((p_s − o_k) × (−F n̂_s)): the joint torques pressing each screw into the terrain."""
+        """τ_k = Σ_s [s beyond k] â_k · ((p_s − o_k) × (−F n̂_s)): the joint torques pressing each screw into the
+        terrain, and the screw forces F."""
         from scipy.spatial.transform import Rotation
 
         n, pts = self._envelope_points(poses, terrain)
@@ -267,12 +271,12 @@ class Settle(Component[SettleParams]):
         w = 1e3                                             # equality by a heavy penalty, F ≥ 0 by bounds
         M = np.vstack([np.eye(self._ns), w * C])
         rhs = np.concatenate([np.full(self._ns, self.p.preload), np.zeros(len(C))])
-        self.preload_forces = F = lsq_linear(M, rhs, bounds=(0.0, np.inf)).x
+        F = lsq_linear(M, rhs, bounds=(0.0, np.inf)).x
         f = -F[:, None] * n                                                 # (ns, 3) into the terrain
         Rj = Rotation.from_quat(poses[self._jrow, 3:]).as_matrix()
         axis = np.einsum("kij,kj->ki", Rj, self._jaxis)                    # (nj, 3) world
         arm = pts[None, :, :] - poses[self._jrow, None, :3]               # (nj, ns, 3)
-        return np.einsum("ks,ksi,ki->k", self._distal, np.cross(arm, f[None]), axis)
+        return np.einsum("ks,ksi,ki->k", self._distal, np.cross(arm, f[None]), axis), F
 
     # -- outputs and update ----------------------------------------------------------------------
     def output(self, t, xd, u, y):
@@ -284,7 +288,9 @@ class Settle(Component[SettleParams]):
         latched, holding = phase >= SettlePhase.LOADING, phase == SettlePhase.HOLDING
         phi, n, pts, rows = nearest = self._nearest(u.link_poses, terrain)
         if "attraction" in self.used_outputs:        # for calc_attraction at the same inputs
-            self._seen = (terrain, u.link_poses.copy(), nearest)
+            c = u.cache
+            c.terrain, c.nearest = terrain, nearest
+            np.copyto(c.poses, u.link_poses)
         y.gap[:] = phi
         y.max_speed[0] = self._speed(u.link_velocities)
         y.phase[0] = xd[0]
@@ -319,8 +325,9 @@ class Settle(Component[SettleParams]):
         if int(xd[0]) != SettlePhase.SETTLING:
             y.attraction = AttractionSet.empty()
             return
-        terrain, poses, nearest = self._seen
-        if terrain is not u.terrain or not np.array_equal(poses, u.link_poses):
+        c = u.cache
+        nearest = c.nearest
+        if c.terrain is not u.terrain or not np.array_equal(c.poses, u.link_poses):
             nearest = self._nearest(u.link_poses, u.terrain)          # output() saw other inputs
         phi, n, pts, _ = nearest
         pulled = phi > 0.0
@@ -346,7 +353,8 @@ class Settle(Component[SettleParams]):
             xd[2] = t
         if quiet and t - xd[2] >= p.quiet_time - 1e-12:
             xd[3:3 + self._nj] = np.where(self._speed_screw, 0.0, u.joint_q)
-            xd[3 + self._nj:] = np.where(self._screw, 0.0, self._preload_torques(u.link_poses, u.terrain))
+            tau, u.cache.preload_forces = self._preload_torques(u.link_poses, u.terrain)
+            xd[3 + self._nj:] = np.where(self._screw, 0.0, tau)
             xd[0], xd[1] = (SettlePhase.HOLDING if p.load_time <= 0.0 else SettlePhase.LOADING), t
             return
         if t >= p.time_limit:
@@ -355,3 +363,14 @@ class Settle(Component[SettleParams]):
                       f"screws within contact_band {p.contact_band:g} m (need {self._need}; farthest "
                       f"{self.screws.names[worst]} at {phi[worst]:.4f} m), fastest link {speed:.4f} m/s "
                       f"(max_speed {p.max_speed:g}); raise time_limit or k_attract, or improve the shape guess")
+
+
+class _Cache:
+    """One run's settle state outside the discrete state: what output() saw, for calc_attraction
+    (terrain, link poses, nearest samples), and ``preload_forces`` (N per screw, set at the latch)."""
+
+    __slots__ = ("terrain", "poses", "nearest", "preload_forces")
+
+    def __init__(self, nl: int):
+        self.terrain, self.nearest, self.preload_forces = None, None, None
+        self.poses = np.full((nl, 7), np.nan)

@@ -215,7 +215,7 @@ def _robot_poses(comp, columns, data, records):
         idx, _ = signal_columns(columns, qref)
         if len(idx) == nq:
             out = np.empty((len(t), len(links), 7))
-            x = h.x.copy()
+            x = h.x                           # in place: the component's cache holds views of it
             x[nq:] = 0.0
             for k in range(len(t)):           # replay only: one forward kinematics per recorded row
                 x[:nq] = data[k, idx]

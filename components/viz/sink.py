@@ -32,8 +32,9 @@ transforms, series values, the real-time factor, contacts, attraction arrows
 and tethers are queued and sent in ``send_columns`` batches
 (:class:`.scene_log.SceneLog`) of 1 s of frames to a live viewer, 2 s to a
 file (``flush_frames``). Everything is sent and the file closed at ``t_end``,
-on :meth:`close`, or at interpreter exit. A later run of the same instance
-(time going back) starts a new recording. Entity layout and the physical /
+on the session's ``close()`` (``plan.caches[name].close()``), or at interpreter
+exit. A later run of the same build (time going back) starts a new recording.
+The recording and its clock are the build's (``make_cache``), not the component's. Entity layout and the physical /
 ornamental contract: :mod:`.entities`.
 """
 
@@ -139,81 +140,92 @@ class RerunSink(Component[RerunSinkParams]):
 
         self._meshes = robot.derived(link_meshes) if robot is not None else []
         self._visuals = robot.derived(robot_visuals) if robot is not None else {}   # arrow conversion once
-        self._log = None
-        self._finalizer = None
-        self._last_t = -np.inf
-        self._next_t = -np.inf
-        self.used_target = None
+
+    def make_cache(self, x, u, y):
+        """This build's viewer session (:class:`_Viewing`): the recording, opened at the first frame, and
+        its clock."""
+        return _Viewing()
 
     # -- the per-frame path ---------------------------------------------------------------
     def update(self, t, xd, u):
-        if t < self._last_t:                         # a new run of the same instance
-            self.close()
-            self._last_t = self._next_t = -np.inf
+        v = u.cache
+        if t < v.last_t:                             # a new run of the same build
+            v.close()
+            v.last_t = v.next_t = -np.inf
         if self.rate is None:                        # no scheduler rate: decimate here
-            if t < self._next_t - 1e-9 * self._period:
+            if t < v.next_t - 1e-9 * self._period:
                 return
-            self._next_t = t + self._period
-        if self._log is None:
-            if self._last_t > -np.inf:               # closed at t_end: nothing more this run
+            v.next_t = t + self._period
+        if v.log is None:
+            if v.last_t > -np.inf:                   # closed at t_end: nothing more this run
                 return
-            self._open(t, u)
+            self._open(v, t, u)
         wall = time.perf_counter()
-        rtf = (t - self._last_t) / (wall - self._last_wall) if self._last_t > -np.inf else np.nan
-        self._last_t, self._last_wall = t, wall
-        tethers = u.tethers if self._has_tethers else (
-            self._ropes.segments(self._poses) if self._ropes is not None else None)
-        self._log.add_frame(t, self._poses, self._series, rtf,
-                            contacts=u.contacts if self._has_contacts else None, tethers=tethers,
-                            attraction=u.attraction if self._has_attraction else None)
+        rtf = (t - v.last_t) / (wall - v.last_wall) if v.last_t > -np.inf else np.nan
+        v.last_t, v.last_wall = t, wall
+        tethers = u.tethers if v.has_tethers else (v.ropes.segments(v.poses) if v.ropes is not None else None)
+        v.log.add_frame(t, v.poses, v.series, rtf, contacts=u.contacts if v.has_contacts else None,
+                        tethers=tethers, attraction=u.attraction if v.has_attraction else None)
         if self.p.t_end is not None and t >= self.p.t_end - 0.5 * self._period:
-            self.close()
+            v.close()
 
-    # -- opening and closing --------------------------------------------------------------
-    def _open(self, t, u):
+    # -- opening ----------------------------------------------------------------------------
+    def _open(self, v: _Viewing, t, u):
         from .blueprint import default_blueprint
         from .terrain_geometry import terrain_mesh
 
         p = self.p
-        self._poses = u.link_poses                   # input views: never reallocated
-        self._series = [getattr(u, series_input_name(i)) for i in range(len(p.series))]
-        self._has_contacts = u.contacts is not None
-        self._has_tethers = u.tethers is not None
-        self._has_attraction = u.attraction is not None
-        self._ropes = _ropes(p.tether_lines, self.links) if not self._has_tethers else None
-        pos = np.asarray(self._poses)[:, :3] if len(self.links) else np.zeros((1, 3))
+        v.poses = u.link_poses                       # input views: never reallocated
+        v.series = [getattr(u, series_input_name(i)) for i in range(len(p.series))]
+        v.has_contacts = u.contacts is not None
+        v.has_tethers = u.tethers is not None
+        v.has_attraction = u.attraction is not None
+        v.ropes = _ropes(p.tether_lines, self.links) if not v.has_tethers else None
+        pos = np.asarray(v.poses)[:, :3] if len(self.links) else np.zeros((1, 3))
         center = np.asarray(p.terrain_center) if p.terrain_center is not None else pos.mean(axis=0)
         terrain = u.terrain
         tmesh = None
         if terrain is not None:
             tmesh = terrain_mesh(terrain, center, p.terrain_extent, p.terrain_cell, p.terrain_cutaway)
-        series = [(s, None, int(np.size(v))) for s, v in zip(p.series, self._series)]
+        series = [(s, None, int(np.size(a))) for s, a in zip(p.series, v.series)]
         bp = default_blueprint(pos, [E.series_path(s) for s in p.series])
-        rec, self.used_target = open_recording(self.target, p.application_id, p.recording_id, blueprint=bp)
+        rec, v.used_target = open_recording(self.target, p.application_id, p.recording_id, blueprint=bp)
         from .scene_log import SceneLog
 
-        self._log = SceneLog(rec, robot=p.robot_component, link_names=self.links, meshes=self._meshes, series=series,
-                             visuals=self._visuals,
-                             body_frames=p.body_frames, frame_length=p.frame_length, force_scale=p.force_scale,
-                             flush_frames=self._flush_frames(), contacts=self._has_contacts,
-                             attraction=self._has_attraction,
-                             tethers=self._has_tethers or self._ropes is not None)
-        self._log.log_static(tmesh)
-        self._finalizer = weakref.finalize(self, _finish, self._log, rec, self.used_target.mode)
-        self._last_wall = time.perf_counter()
+        v.log = SceneLog(rec, robot=p.robot_component, link_names=self.links, meshes=self._meshes, series=series,
+                         visuals=self._visuals,
+                         body_frames=p.body_frames, frame_length=p.frame_length, force_scale=p.force_scale,
+                         flush_frames=self._flush_frames(v.used_target), contacts=v.has_contacts,
+                         attraction=v.has_attraction, tethers=v.has_tethers or v.ropes is not None)
+        v.log.log_static(tmesh)
+        v.finalizer = weakref.finalize(v, _finish, v.log, rec, v.used_target.mode)
+        v.last_wall = time.perf_counter()
 
-    def _flush_frames(self) -> int:
+    def _flush_frames(self, target) -> int:
         # a live viewer wants to see the run move; a file only pays per send_columns call
         if self.p.flush_frames is not None:
             return self.p.flush_frames
-        seconds = SAVE_FLUSH_S if self.used_target.mode == "save" else LIVE_FLUSH_S
+        seconds = SAVE_FLUSH_S if target.mode == "save" else LIVE_FLUSH_S
         return max(1, round(seconds / self._period))
+
+
+class _Viewing:
+    """One build's viewer session: the recording and scene log (None until the first frame, and after
+    ``close()``), the last frame's simulated and wall time, the next frame's time when the sink
+    decimates itself, and the input views and options the first frame found."""
+
+    def __init__(self):
+        self.log = self.finalizer = self.used_target = None
+        self.last_t = self.next_t = -np.inf
+        self.last_wall = 0.0
+        self.poses, self.series, self.ropes = None, [], None
+        self.has_contacts = self.has_tethers = self.has_attraction = False
 
     def close(self) -> None:
         """Send what is queued and close the recording (idempotent)."""
-        if self._finalizer is not None:
-            self._finalizer()
-        self._finalizer, self._log = None, None
+        if self.finalizer is not None:
+            self.finalizer()
+        self.finalizer, self.log = None, None
 
 
 class _Ropes:

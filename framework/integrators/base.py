@@ -56,6 +56,10 @@ class FixedStep(Integrator):
 
     def advance(self, t0, t1, k1):
         n = self.p.substeps
+        if n == 1:
+            self.step(t0, t1 - t0, k1)
+            self.stats["steps"] += 1
+            return
         h = (t1 - t0) / n
         for s in range(n):
             if s:

@@ -21,6 +21,8 @@ class RK4(FixedStep):
         self.xs = np.zeros(nx)
         self.k = np.zeros((4, ndx))
         self.tmp = np.zeros(ndx)
+        self._to_stage = self.sys.bind_integrate(self.x0, self.tmp, self.xs)
+        self._to_end = self.sys.bind_integrate(self.x0, self.tmp, self.sys.X)
 
     def step(self, t, h, k1):
         sys, k, tmp = self.sys, self.k, self.tmp
@@ -28,7 +30,7 @@ class RK4(FixedStep):
         np.copyto(k[0], k1)
         for i, (c, a) in enumerate(((0.5, 0.5), (0.5, 0.5), (1.0, 1.0)), start=1):
             np.multiply(k[i - 1], a * h, out=tmp)
-            sys.integrate(self.x0, tmp, self.xs)
+            self._to_stage()                         # xs = x0 ⊕ tmp
             np.copyto(k[i], sys.f(t + c * h, self.xs))
             sys.dexp_inv(self.x0, tmp, k[i])  # Munthe-Kaas: keeps order 4 on SE(3)
         self.stats["f_evals"] += 3
@@ -36,4 +38,4 @@ class RK4(FixedStep):
         tmp += 2.0 * k[1]
         tmp += 2.0 * k[2]
         tmp *= h / 6.0
-        sys.integrate(self.x0, tmp, sys.X)
+        self._to_end()                               # X = x0 ⊕ tmp

@@ -27,15 +27,24 @@ class SemiImplicitEuler(FixedStep):
     description = "symplectic Euler: v then q; one evaluation per step"
 
     def _alloc(self, nx, ndx):
+        sys = self.sys
         self.dxh = np.zeros(ndx)
-        self.pairs = self.sys.second_order_pairs()
-        # views into dxh, made once: the position rows and a scratch of their size
+        self.pairs = sys.second_order_pairs()
+        # views into dxh, made once: the position rows and a scratch of their size; the velocity rows
+        # of the plan's DX, which is k1 at every base step
         self._pos_views = [(self.dxh[pos], vel, np.zeros(pos.stop - pos.start)) for pos, vel in self.pairs]
+        self._dx, self._dx_views = sys.DX, [(d, sys.DX[vel], tmp) for d, vel, tmp in self._pos_views]
+        self._integrate = sys.bind_integrate(sys.X, self.dxh, sys.X)
 
     def step(self, t, h, k1):
         np.multiply(k1, h, out=self.dxh)
         hh = h * h
-        for dpos, vel, tmp in self._pos_views:
-            np.multiply(k1[vel], hh, out=tmp)
-            dpos += tmp
-        self.sys.integrate(self.sys.X, self.dxh, self.sys.X)
+        if k1 is self._dx:
+            for dpos, kvel, tmp in self._dx_views:
+                np.multiply(kvel, hh, out=tmp)
+                dpos += tmp
+        else:
+            for dpos, vel, tmp in self._pos_views:
+                np.multiply(k1[vel], hh, out=tmp)
+                dpos += tmp
+        self._integrate()

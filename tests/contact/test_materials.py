@@ -107,12 +107,12 @@ def test_fitted_material_file_included_by_a_terrain_runs_in_the_default_scene(tm
                            sim_overrides={"duration": 0.02}, registry=registry)
     result = session.run()
     assert result.summary["completed"], result.summary
-    contact = session.plan.components["contact"]
-    (m,) = contact._terrain.materials
+    contact = session.plan.caches["contact"]          # the terrain in use and its packed table: this run's
+    (m,) = contact.terrain.materials
     assert m.name == "glacier"
     assert (m.mu, m.ev_a, m.ev_b) == (pytest.approx(0.2, rel=1e-12), pytest.approx(2.5, rel=1e-12),
                                       pytest.approx(0.01, rel=1e-10))
-    np.testing.assert_array_equal(contact._mats, [[1.2e5, 900.0, m.mu, m.ev_a, m.ev_b]])
+    np.testing.assert_array_equal(contact.mats, [[1.2e5, 900.0, m.mu, m.ev_a, m.ev_b]])
     # physics: the contact on the included terrain gives the forces of the fitted values
     # written inline, not those of the default material
     inline = {"kind": "plane", "materials": [m.model_dump()]}

@@ -96,7 +96,7 @@ def test_broad_phase_skips_a_robot_far_from_the_ground_and_changes_nothing_in_co
     far = contact()
     _, high = robot_state(z=2.0)
     y = feed(far, high)
-    assert far.c.stats["screws_tested"] == 0 and far.c.stats["samples_queried"] == 0
+    assert far.u.cache.stats["screws_tested"] == 0 and far.u.cache.stats["samples_queried"] == 0
     assert not y["wrenches"].any() and y["contacts"][0] == 0
     # in contact: the same wrenches with and without the broad phase (planes in numba and
     # through Terrain.query alike), and the broad phase sends fewer screws on when pitched up
@@ -116,7 +116,7 @@ def test_broad_phase_skips_a_robot_far_from_the_ground_and_changes_nothing_in_co
     y_on, y_off = feed(on, tilted), feed(off, tilted)
     assert y_on["contacts"][0] > 0
     np.testing.assert_allclose(y_on["wrenches"], y_off["wrenches"], rtol=0, atol=1e-12)
-    assert 0 < on.c.stats["screws_tested"] < off.c.stats["screws_tested"] == on.c.screws.ns
+    assert 0 < on.u.cache.stats["screws_tested"] < off.u.cache.stats["screws_tested"] == on.c.screws.ns
 
 
 def test_material_override_replaces_the_terrain_value():
@@ -151,3 +151,25 @@ def test_an_unconnected_terrain_is_named():
 def test_bad_sampling_parameters_are_rejected():
     with pytest.raises(ValueError, match="per_ring"):
         Harness(ScrewSdfContact, dict(per_ring=0), uses={"robot": MODEL})
+
+
+def test_the_contact_set_describes_its_inputs_even_when_output_ran_at_others():
+    """calc_contact_set reuses the last evaluation only if it saw these very inputs and terrain; else it
+    evaluates again into scratch outputs (the held outputs stay as output() left them)."""
+    _, a = robot_state(z=0.0895)
+    _, b = robot_state(z=0.0890)                       # deeper: other forces
+    h = contact()
+    ya = feed(h, a)
+    ref_b = feed(contact(), b)["contact_set"]
+    for name in ("link_poses", "link_velocities", "joint_v"):
+        h.set_input(name, b[name])
+    h.c.calc_contact_set(0.0, None, h.u, h.y)          # output() has not run at b
+    cs = h.y.contact_set
+    np.testing.assert_array_equal(cs.normal_force, ref_b.normal_force)
+    np.testing.assert_array_equal(cs.points, ref_b.points)
+    np.testing.assert_array_equal(h.y.wrenches, ya["wrenches"])        # outputs untouched
+    # a new terrain object (softer ice) at the same inputs: evaluated again too
+    soft = dict(ICE, materials=[dict(ICE["materials"][0], k=5.0e4)])
+    h.inputs.terrain = load_terrain(soft)
+    h.c.calc_contact_set(0.0, None, h.u, h.y)
+    np.testing.assert_allclose(h.y.contact_set.normal_force, 0.5 * ref_b.normal_force, rtol=0.05)

@@ -193,7 +193,8 @@ def test_each_build_makes_its_own_cache_and_nobody_rebinds_it(scene):
     u1 = s1.plan.components["scale"]
     assert not hasattr(u1, "cache") and not any(isinstance(v, dict) for v in vars(u1).values())
     (_, _, u, _), = [c for c in s1.plan.major[0] if c[0].__self__ is u1]
-    assert u.cache is not None
+    assert u.cache is not None and s1.plan.caches["scale"] is u.cache
+    assert s2.plan.caches["scale"] is not u.cache
     with pytest.raises(AttributeError, match="made by the framework"):
         u.cache = {}
     s1.run(), s2.run()

@@ -39,7 +39,7 @@ def hold(state, mu, duration):
 
 def test_placement_preloads_every_screw_with_a_self_equilibrated_wall_force(placed):
     s, r, _ = placed
-    F_pre = s.plan.components[P + "settle"].preload_forces
+    F_pre = s.plan.caches[P + "settle"].preload_forces
     i = np.flatnonzero(r[P + "settle.phase"][:, 0] < SettlePhase.HOLDING)[-1]   # the end of loading: gravity off
     assert r[P + "settle.phase"][i, 0] == SettlePhase.LOADING
     F = r[P + "contact.screw_normal_force"][i]

@@ -76,7 +76,7 @@ def test_latch_after_quiet_time_sets_gravity_setpoints_and_preload():
     assert y["hold_time"][0] == pytest.approx(0.01)
     assert np.all(y["wrenches"] == 0.0)
     # on one plane the pressing forces cannot balance (all push down): the self-equilibrated preload is ~0
-    assert np.abs(h.c.preload_forces).max() < 1e-3 * 50.0
+    assert np.abs(h.u.cache.preload_forces).max() < 1e-3 * 50.0
 
 
 def test_loading_phase_keeps_gravity_off_and_joints_free_then_latches_the_loaded_shape():
