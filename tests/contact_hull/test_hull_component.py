@@ -36,7 +36,7 @@ def _settle(urdf, z0, t_end=0.3, dt=1e-4, **hull):
         x[:] = out
     o = mb.outputs()
     hc.inputs.link_poses, hc.inputs.link_velocities = o["link_poses"], o["link_velocities"]
-    return hc.outputs(), hc.c.last, o
+    return hc.outputs(), hc.u.cache.last, o
 
 
 @pytest.mark.parametrize("geometry, slices, z_rest", [
@@ -75,7 +75,7 @@ def straight():
 
 
 def _module_links(hc, i):
-    return [r for r, n in enumerate(hc.c.link_names) if n.endswith(f"_{i:02d}")]
+    return [r for r, n in enumerate(hc.c.robot.links) if n.endswith(f"_{i:02d}")]
 
 
 def _press(hc, poses, vel, i, j, gap):
@@ -146,7 +146,7 @@ def test_screw_blades_rest_on_their_tips():
         assert (y["contacts"][0] > 0) == touching
         if touching:
             assert y["normal_force"][0] > 0
-            assert np.all(hc.c.last["depth"] <= 0.001 + 1e-9)
+            assert np.all(hc.u.cache.last["depth"] <= 0.001 + 1e-9)
 
 
 def test_spinning_screw_friction_uses_the_thread_direction():
@@ -163,8 +163,8 @@ def test_spinning_screw_friction_uses_the_thread_direction():
     poses[:, 2] += 0.09 - 0.001
     hc.inputs.link_poses, hc.inputs.link_velocities = poses, o["link_velocities"]
     hc.outputs()
-    c = hc.c.last
-    screw = hc.c.link_names.index("screw_front_link_00")
+    c = hc.u.cache.last
+    screw = hc.c.robot.links.index("screw_front_link_00")
     on = c["link"] == screw
     assert on.sum() == 3
     axis = np.array([1.0, 0.0, 0.0])
@@ -190,20 +190,20 @@ def test_material_table_packed_once_per_terrain_with_the_override_by_named_colum
     poses[:, 2] += 0.09 - 0.001
     hc.inputs.link_poses, hc.inputs.link_velocities = poses, o["link_velocities"]
     hc.outputs()
-    table = hc.c._mats
+    table = hc.u.cache.mats
     np.testing.assert_array_equal(table, [[K, C, 0.2, 2.0, 0.01]])
     np.testing.assert_array_equal(table, material_table(terrain.materials, hc.c.p.material, fn_max=500.0,
                                                         ev_floor=hc.c.p.ev_floor))
     hc.outputs()
-    assert hc.c._mats is table                              # same terrain object: not packed again
-    c = hc.c.last
-    on = c["link"] == hc.c.link_names.index("screw_front_link_00")
+    assert hc.u.cache.mats is table                              # same terrain object: not packed again
+    c = hc.u.cache.last
+    on = c["link"] == hc.c.robot.links.index("screw_front_link_00")
     e = thread_direction(np.tile([0.0, 0.0, -1.0], (on.sum(), 1)), np.array([1.0, 0.0, 0.0]), 0.35, 1)
     f, _ = contact_forces(c["depth"][on], c["normal"][on], c["slip"][on], e, K, C, 0.2, 2.0, 0.01, 1e-3)
     np.testing.assert_allclose(c["force"][on], f, rtol=1e-9, atol=1e-9)
     hc.inputs.terrain = load_terrain({"kind": "plane", "materials": [{"k": 2 * K, "c": C, "mu": 0.3}]})
     hc.outputs()
-    np.testing.assert_array_equal(hc.c._mats, [[2 * K, C, 0.2, 2.0, 0.0]])     # a new terrain: packed anew
+    np.testing.assert_array_equal(hc.u.cache.mats, [[2 * K, C, 0.2, 2.0, 0.0]])     # a new terrain: packed anew
 
 
 # -- errors ---------------------------------------------------------------------------------

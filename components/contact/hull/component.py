@@ -48,6 +48,8 @@ tested against the terrain only when Terrain.distance_lower_bound(centre, radius
 
 from __future__ import annotations
 
+import dataclasses
+
 from typing import Literal
 
 import numpy as np
@@ -126,15 +128,13 @@ class HullContact(Component[HullContactParams]):
         self.geo = robot.derived(robot_geometry, GeometryOptions(
             cylinder_slices=p.cylinder_slices, screw_geometry=p.screw_geometry, blade_hulls=p.blade_hulls,
             mesh_hulls=p.mesh_hulls, min_module_gap=p.min_module_gap))
+        self._mode = MODES[p.regularisation]
+
+    def make_cache(self, x, u, y) -> "HullRun":
         import coal
 
-        self._T = [coal.Transform3s() for _ in range(self.geo.n_pieces)]
-        self._narrow = Narrowphase(p.max_contacts)
-        self._terrain, self._parts, self._mats = None, [], None
-        self._mode = MODES[p.regularisation]
-        self.link_names = robot.links
-        self.last: dict[str, np.ndarray] = {}
-        self._seen = None
+        return HullRun([coal.Transform3s() for _ in range(self.geo.n_pieces)], Narrowphase(self.p.max_contacts),
+                       _Scratch(self.robot.nl))
 
     # -- geometry in the world ---------------------------------------------------------
     def _pieces_world(self, poses):
@@ -146,28 +146,28 @@ class HullContact(Component[HullContactParams]):
         cw = np.einsum("nij,nj->ni", Rl, g.sphere_c) + poses[g.piece_link, :3]
         return R, Rw, pw, cw
 
-    def _terrain_contacts(self, terrain, Rw, pw, cw):
-        if terrain is not self._terrain:
+    def _terrain_contacts(self, run, terrain, Rw, pw, cw):
+        if terrain is not run.terrain:
             p = self.p
-            self._parts = terrain_parts(terrain, p.terrain_extent, p.terrain_segments, p.terrain_resolution)
-            self._mats = material_table(terrain.materials, p.material, fn_max=p.fn_max, ev_floor=p.ev_floor,
-                                        owner=self.name)
-            self._terrain = terrain
+            run.parts = terrain_parts(terrain, p.terrain_extent, p.terrain_segments, p.terrain_resolution)
+            run.mats = material_table(terrain.materials, p.material, fn_max=p.fn_max, ev_floor=p.ev_floor,
+                                      owner=self.name)
+            run.terrain = terrain
         g = self.geo
         near = np.flatnonzero(terrain.distance_lower_bound(cw, g.sphere_r) <= 0.0)
         rows = []
         for i in near:
-            T = self._T[i]
+            T = run.transforms[i]
             T.setRotation(Rw[i])
             T.setTranslation(pw[i])
-            for part in self._parts:
-                hit = self._narrow.collide(g.geoms[i], T, part.geom, part.transform, part.triangles)
+            for part in run.parts:
+                hit = run.narrow.collide(g.geoms[i], T, part.geom, part.transform, part.triangles)
                 if hit is not None:
                     # coal's normal points from the robot into the terrain
                     rows.append((g.piece_link[i], hit[0], -hit[1], hit[2], part.triangles))
         return rows
 
-    def _body_contacts(self, Rw, pw, cw):
+    def _body_contacts(self, run, Rw, pw, cw):
         g = self.geo
         a, b = g.pair_a, g.pair_b
         gap = np.linalg.norm(cw[a] - cw[b], axis=1) - g.sphere_r[a] - g.sphere_r[b]
@@ -175,9 +175,9 @@ class HullContact(Component[HullContactParams]):
         for k in np.flatnonzero(gap <= 0.0):
             i, j = a[k], b[k]
             for n in (i, j):
-                self._T[n].setRotation(Rw[n])
-                self._T[n].setTranslation(pw[n])
-            hit = self._narrow.collide(g.geoms[i], self._T[i], g.geoms[j], self._T[j], False)
+                run.transforms[n].setRotation(Rw[n])
+                run.transforms[n].setTranslation(pw[n])
+            hit = run.narrow.collide(g.geoms[i], run.transforms[i], g.geoms[j], run.transforms[j], False)
             if hit is not None:
                 rows.append((g.piece_link[i], g.piece_link[j], hit[0], hit[1], hit[2]))
         return rows
@@ -198,14 +198,14 @@ class HullContact(Component[HullContactParams]):
         return np.where((hand != 0)[:, None], e, 0.0)
 
     def output(self, t, x, u, y):
-        p = self.p
+        p, run = self.p, u.cache
         poses, vel, terrain = u.link_poses, u.link_velocities, u.terrain
         if terrain is None:
             raise ValueError(f"{self.name}: input 'terrain' carries no Terrain; connect a terrain component's "
                              "'terrain' output to it")
         R, Rw, pw, cw = self._pieces_world(poses)
-        trows = self._terrain_contacts(terrain, Rw, pw, cw)
-        brows = self._body_contacts(Rw, pw, cw) if p.body_contact and len(self.geo.pair_a) else []
+        trows = self._terrain_contacts(run, terrain, Rw, pw, cw)
+        brows = self._body_contacts(run, Rw, pw, cw) if p.body_contact and len(self.geo.pair_a) else []
 
         nt = len(trows)
         t_link = np.array([r[0] for r in trows], dtype=np.int64)
@@ -224,7 +224,7 @@ class HullContact(Component[HullContactParams]):
             for m in np.unique(q.material):
                 sel = q.material == m
                 f, fn = np.empty((sel.sum(), 3)), np.empty(sel.sum())
-                row = self._mats[m]      # packed with this terrain by _terrain_contacts
+                row = run.mats[m]        # packed with this terrain by _terrain_contacts
                 contact_forces_nb(t_depth[sel], t_normal[sel], np.ascontiguousarray(v[sel]),
                                   np.ascontiguousarray(e[sel]), row[K], row[C], row[MU], row[EV_A], row[EV_B],
                                   p.v_eps, self._mode, p.ev_floor, f, fn)
@@ -250,23 +250,39 @@ class HullContact(Component[HullContactParams]):
         y.contacts[0] = nt
         y.body_normal_force[0] = b_fn.sum()
         y.body_contacts[0] = nb
-        self.last = {"t": t, "link": t_link, "point": t_point, "normal": t_normal, "depth": t_depth,
+        run.last = {"t": t, "link": t_link, "point": t_point, "normal": t_normal, "depth": t_depth,
                      "force": t_force, "fn": t_fn, "slip": v if nt else np.zeros((0, 3)),
                      "material": q.material if nt else np.zeros(0, dtype=np.int64),
                      "body_a": b_a, "body_b": b_b, "body_point": b_point, "body_normal": b_normal,
                      "body_depth": b_depth, "body_force": b_force, "body_fn": b_fn}
-        self._seen = (terrain, poses.copy(), vel.copy())
+        run.seen = (terrain, poses.copy(), vel.copy())
 
     def calc_contact_set(self, t, x, u, y):
-        s = self._seen
+        run = u.cache
+        s = run.seen
         if s is None or not (u.terrain is s[0] and np.array_equal(u.link_poses, s[1])
                              and np.array_equal(u.link_velocities, s[2])):
-            self.output(t, x, u, _Scratch(self.robot.nl))    # the last evaluation was at other inputs
-        c = self.last
+            self.output(t, x, u, run.scratch)    # the last evaluation was at other inputs
+        c = run.last
         y.contact_set = ContactSet(t=float(t), points=c["point"].copy(), normals=c["normal"].copy(),
                                    forces=c["force"].copy(), normal_force=c["fn"].copy(), depth=c["depth"].copy(),
                                    slip=c["slip"].copy(), link=c["link"].copy(), material=c["material"].copy(),
                                    link_names=self.robot.links)
+
+
+@dataclasses.dataclass
+class HullRun:
+    """One run's hull state (``u.cache``): coal transforms moved every call, the narrow phase, the
+    terrain last packed (its parts and material table), the last evaluation and its inputs."""
+
+    transforms: list
+    narrow: Narrowphase
+    scratch: "_Scratch"
+    terrain: object = None
+    parts: list = dataclasses.field(default_factory=list)
+    mats: np.ndarray | None = None
+    last: dict = dataclasses.field(default_factory=dict)
+    seen: tuple | None = None
 
 
 class _Scratch:
