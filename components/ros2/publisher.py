@@ -37,6 +37,8 @@ out  none
 
 from __future__ import annotations
 
+import dataclasses
+
 import time
 import weakref
 
@@ -117,12 +119,10 @@ class Ros2Publisher(Component[Ros2PublisherParams]):
         tick = 1.0 / self.rate
         self.periods = {k: period_of(r, tick, f"{self.name}: rates.{k} (at the component's {self.rate:g} Hz):")
                         for k, r in self.topic_rates.items()}
-        self._templates = self._make_templates()
-        self._dds = None
-        self._finalizer = None
-        self.published = dict.fromkeys(self.topic_rates, 0)
-        self.publish_time = 0.0                  # wall s spent publishing (the interface's cost per tick)
-        self.open_time = 0.0                     # wall s to open the participant and writers (first tick)
+
+    def make_cache(self, x, u, y) -> "PublisherRun":
+        """This run's message templates (their bytes are patched each publish) and DDS state."""
+        return PublisherRun(templates=self._make_templates(), published=dict.fromkeys(self.topic_rates, 0))
 
     # -- templates: the messages of this robot, serialised once ----------------------------
     def _make_templates(self) -> dict:
@@ -172,13 +172,13 @@ class Ros2Publisher(Component[Ros2PublisherParams]):
         return out
 
     # -- opening and closing ------------------------------------------------------------------
-    def _open(self, u):
+    def _open(self, run: "PublisherRun", u) -> None:
         from .transport import Ros2Participant
 
         p = self.p
         dds = Ros2Participant(p.domain_id, p.interface)
         writers = {}
-        for key, entry in self._templates.items():
+        for key, entry in run.templates.items():
             if key not in self.topic_rates:
                 continue
             for topic, typ, tpl in (entry if isinstance(entry, list) else [entry]):
@@ -188,46 +188,63 @@ class Ros2Publisher(Component[Ros2PublisherParams]):
 
             w = dds.writer("/robot_description", M.String)
             w.write(M.String(data=self.robot.urdf))
-        self._writers = writers
-        self._inputs = {"joint_states": [("position", u.joint_positions), ("velocity", u.joint_velocities)]
+        inputs = {"joint_states": [("position", u.joint_positions), ("velocity", u.joint_velocities)]
                         + ([("effort", u.joint_efforts)] if p.effort else []),
                         "tf": [("poses", u.link_poses)],
                         "imu": [("orientation", u.imu_orientation), ("angular_velocity", u.imu_angular_rate),
                                 ("linear_acceleration", u.imu_specific_force)]}
-        self._wrenches = u.sensor_wrenches
+        run.wrenches = u.sensor_wrenches
         # (key, period, writers, inputs) in a flat tuple: the per-tick loop reads no dicts
-        self._plan = tuple((key, self.periods[key], tuple(writers[key]), tuple(self._inputs.get(key, ())))
-                           for key in self.topic_rates)
-        self._tick = 0
-        self._dds = dds
-        self._finalizer = weakref.finalize(self, dds.close)
-
-    def close(self) -> None:
-        if self._finalizer is not None:
-            self._finalizer()
-        self._finalizer, self._dds = None, None
+        run.plan = tuple((key, self.periods[key], tuple(writers[key]), tuple(inputs.get(key, ())))
+                         for key in self.topic_rates)
+        run.tick = 0
+        run.dds = dds
+        run.finalizer = weakref.finalize(run, dds.close)
 
     # -- the per-tick path ----------------------------------------------------------------------
     def update(self, t, xd, u):
-        if self._dds is None:
+        run = u.cache
+        if run.dds is None:
             wall = time.perf_counter()
-            self._open(u)
-            self.open_time = time.perf_counter() - wall
+            self._open(run, u)
+            run.open_time = time.perf_counter() - wall
         wall = time.perf_counter()
         ns = int(t * 1e9 + 0.5) if t > 0 else 0
         sec, nsec = divmod(ns, 1_000_000_000)
-        tick = self._tick
-        for key, period, writers, inputs in self._plan:
+        tick = run.tick
+        for key, period, writers, inputs in run.plan:
             if tick % period:
                 continue
             for k, (writer, tpl) in enumerate(writers):
                 tpl.set_stamp(sec, nsec)
                 if key == "wrench":
-                    tpl.set_floats("wrench", self._wrenches[k])
+                    tpl.set_floats("wrench", run.wrenches[k])
                 else:
                     for field, arr in inputs:
                         tpl.set_floats(field, arr.reshape(-1))
                 writer.write(tpl.buf)
-            self.published[key] += 1
-        self._tick = tick + 1
-        self.publish_time += time.perf_counter() - wall
+            run.published[key] += 1
+        run.tick = tick + 1
+        run.publish_time += time.perf_counter() - wall
+
+
+@dataclasses.dataclass(eq=False)
+class PublisherRun:
+    """One run's publishing state (``u.cache``): message templates, the DDS participant and writers
+    (opened on the first tick), the tick count and what was published."""
+
+    templates: dict
+    published: dict                       # messages sent per topic key
+    dds: object = None
+    plan: tuple = ()
+    wrenches: np.ndarray | None = None
+    tick: int = 0
+    publish_time: float = 0.0             # wall s spent publishing (the interface's cost per tick)
+    open_time: float = 0.0                # wall s to open the participant and writers (first tick)
+    finalizer: object = None
+
+    def close(self) -> None:
+        """Close the participant now (otherwise when the run's cache is dropped)."""
+        if self.finalizer is not None:
+            self.finalizer()
+        self.finalizer, self.dds = None, None
