@@ -228,69 +228,36 @@ def _block_sum(a, lo, n):
     return res
 
 
-# NumPy halves longer runs recursively; numba's disk cache cannot load a self-recursive function,
-# so the halving is unrolled six levels deep: enough for about 7000 elements (more raises).
-@njit(cache=True)
-def _halves0(a, lo, n):
-    if n > 128:
-        raise ValueError("np_sum: too many elements (more than about 7000)")
-    return _block_sum(a, lo, n)
-
-
-@njit(cache=True)
-def _halves1(a, lo, n):
-    if n <= 128:
-        return _block_sum(a, lo, n)
-    n2 = n // 2 - (n // 2) % 8
-    return _halves0(a, lo, n2) + _halves0(a, lo + n2, n - n2)
-
-
-@njit(cache=True)
-def _halves2(a, lo, n):
-    if n <= 128:
-        return _block_sum(a, lo, n)
-    n2 = n // 2 - (n // 2) % 8
-    return _halves1(a, lo, n2) + _halves1(a, lo + n2, n - n2)
-
-
-@njit(cache=True)
-def _halves3(a, lo, n):
-    if n <= 128:
-        return _block_sum(a, lo, n)
-    n2 = n // 2 - (n // 2) % 8
-    return _halves2(a, lo, n2) + _halves2(a, lo + n2, n - n2)
-
-
-@njit(cache=True)
-def _halves4(a, lo, n):
-    if n <= 128:
-        return _block_sum(a, lo, n)
-    n2 = n // 2 - (n // 2) % 8
-    return _halves3(a, lo, n2) + _halves3(a, lo + n2, n - n2)
-
-
-@njit(cache=True)
-def _halves5(a, lo, n):
-    if n <= 128:
-        return _block_sum(a, lo, n)
-    n2 = n // 2 - (n // 2) % 8
-    return _halves4(a, lo, n2) + _halves4(a, lo + n2, n - n2)
-
-
-@njit(cache=True)
-def _halves6(a, lo, n):
-    if n <= 128:
-        return _block_sum(a, lo, n)
-    n2 = n // 2 - (n // 2) % 8
-    return _halves5(a, lo, n2) + _halves5(a, lo + n2, n - n2)
-
-
 @njit(cache=True)
 def np_sum(a):
-    """``a.sum()`` of a contiguous float64 vector (up to about 7000 elements), bit for bit: NumPy's
-    pairwise summation (8 partial sums in blocks of up to 128, halves beyond;
-    tests/contact/test_sdf_kernels.py checks it against NumPy)."""
-    return 0.0 + _halves6(a, 0, a.size)       # the reduction starts from the identity: -0.0 sums to 0.0
+    """``a.sum()`` of a contiguous float64 vector, bit for bit: NumPy's pairwise summation (blocks of
+    up to 128 summed by _block_sum, longer runs halved at a multiple of 8 and the halves added).
+    NumPy recurses; numba's disk cache cannot load a self-recursive function, so the same tree is
+    walked with an explicit stack (post-order: a node adds its two halves once both are summed).
+    tests/contact/test_sdf_kernels.py checks it against NumPy."""
+    lo_s = np.empty(128, np.int64)         # 2 frames per halving level: room for 2**63 elements
+    n_s = np.empty(128, np.int64)
+    done = np.empty(128, np.bool_)
+    vals = np.empty(128)
+    top, nv = 0, 0
+    lo_s[0], n_s[0], done[0] = 0, a.size, False
+    while top >= 0:
+        lo, n = lo_s[top], n_s[top]
+        if n <= 128:
+            vals[nv] = _block_sum(a, lo, n)
+            nv += 1
+            top -= 1
+        elif done[top]:
+            vals[nv - 2] = vals[nv - 2] + vals[nv - 1]
+            nv -= 1
+            top -= 1
+        else:
+            n2 = n // 2 - (n // 2) % 8
+            done[top] = True
+            lo_s[top + 1], n_s[top + 1], done[top + 1] = lo + n2, n - n2, False      # right half, summed second
+            lo_s[top + 2], n_s[top + 2], done[top + 2] = lo, n2, False               # left half, summed first
+            top += 2
+    return 0.0 + vals[0]       # the reduction starts from the identity: -0.0 sums to 0.0
 
 
 # -- the component's kernels, on argument records (kernel_args.py) ----------------------------------

@@ -40,7 +40,7 @@ def test_a_record_wants_every_field_by_name():
         Pair(a=np.zeros(1), b=np.zeros(1), scale=1.0, flag=False, c=1)
 
 
-@pytest.mark.parametrize("n", [*range(0, 300), 1000, 2049, 4097, 7000])
+@pytest.mark.parametrize("n", [*range(0, 300), 1000, 2049, 4097, 7000, 8193, 65537, 1_000_003])
 def test_np_sum_is_numpys_sum_bit_for_bit(n):
     rng = np.random.default_rng(n)
     for trial in range(4):
