@@ -25,14 +25,14 @@ from .signals.sources import Constant, Sine, Step
 from .sensors import ForceTorqueSensors, Imu
 from .tethers import Tethers, WrenchSum
 from .viz import RerunSink
-from .ros2 import Ros2Publisher
+from .ros2 import Ros2Commands, Ros2Publisher
 from .ros2.cli import ros2_run_options  # noqa: F401  (hookimpl: --ros2)
 from .viz.cli import viz_add_commands, viz_run_options  # noqa: F401  (hookimpls: --viz, `snakesim replay`)
 
 BUILTIN = (Constant, Step, Sine, Gain, Sum, ZeroOrderHold, Pendulum, ViscousDamper, PointMass, SpringDamper,
            PointContact, HullContact, TerrainSource, Multibody, ScrewSdfContact, ScrewDrive,
            JointPid, JointSpringDamper, JointSetpoints, SerpenoidGait, CsvTrajectory, Schedule, ForceTorqueSensors,
-           Imu, Tethers, WrenchSum, MobilityMonitor, RerunSink, PlanarPose, ScrewSchedule, Ros2Publisher,
+           Imu, Tethers, WrenchSum, MobilityMonitor, RerunSink, PlanarPose, ScrewSchedule, Ros2Publisher, Ros2Commands,
            *PLACEMENT)
 
 

@@ -4,9 +4,11 @@
     transport   a DDS participant on ROS 2's conventions (rt/ topics, QoS, loopback by default)
     template    messages serialised once and patched in place per publish
     publisher   the ros2_publisher sink (/clock, /joint_states, /tf, /robot_description, /imu, /fts/*)
-    attach, cli ``snakesim run --ros2``: the publisher added and wired by port role
+    commands    the ros2_commands source (/joint_commands, /joint_command, /enable_gravity), validated
+    attach, cli ``snakesim run --ros2``: publisher and command source added and wired by port role
 """
 
+from .commands import Ros2Commands
 from .publisher import Ros2Publisher
 
-__all__ = ["Ros2Publisher"]
+__all__ = ["Ros2Commands", "Ros2Publisher"]

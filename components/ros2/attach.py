@@ -10,10 +10,30 @@ Found by what the classes declare, never by component or port names:
     fts       a ``force_torque_sensors`` component (class ForceTorqueSensors): its SENSOR_WRENCHES
               output and its cuts (one WrenchStamped topic per sensor)
 
-``--ros2-domain N`` and ``--ros2-interface IF`` imply ``--ros2`` and set the publisher's params.
+``--ros2-domain N`` and ``--ros2-interface IF`` imply ``--ros2`` and set the publisher's params (and the
+command source's).
+
+The command source (``ros2_commands``, :func:`attach_commands`), added with the publisher when the scene
+has a robot:
+
+    gravity   the robot provider's ``gravity`` input (multibody, "scale" mode), when the scene leaves it
+              unconnected
+    pid       the first ``joint_pid`` (class JointPid): ``commands.setpoint -> pid.setpoint`` and
+              ``commands.rate -> pid.rate_ref`` where the scene leaves them unconnected; the PID's modes
+              (kind_gains/gains ``mode``) are copied so set-points mean what the PID reads
+    q         the robot's JOINT_POSITIONS output (set-points start by holding the joints where they are)
+
+The rule when the scene already drives the PID's set-points (a schedule, a gait, joint_setpoints): plain
+``--ros2`` leaves the scene's connection alone and does not accept joint commands (the source does
+not subscribe to them, and says so once on the ``snakesim.ros2`` logger); ``--ros2-commands`` hands the
+set-points to ROS 2: the scene's connections into ``pid.setpoint`` and ``pid.rate_ref`` are removed
+and the command source's wired instead (each replaced connection is logged). Never both: the two
+sources never fight over one input.
 """
 
 from __future__ import annotations
+
+import logging
 
 from snakesim.framework.assembly import ComponentSpec, Resolved
 from snakesim.framework.rates import nearest_period
@@ -22,6 +42,12 @@ from snakesim.components.port_roles import (IMU_ANGULAR_RATE, IMU_ORIENTATION, I
                                             JOINT_POSITIONS, JOINT_VELOCITIES, LINK_POSES, SENSOR_WRENCHES)
 
 from .publisher import DEFAULT_RATES
+
+log = logging.getLogger("snakesim.ros2")
+COMMANDS = "ros2_commands"
+COMMANDS_RATE = 100.0          # Hz, how often the command topics are polled (rounded to whole base steps)
+#: publisher params the command source shares
+SHARED = ("domain_id", "interface")
 
 NAME = "ros2"
 ROBOT_ROLES = {LINK_POSES: "link_poses", JOINT_POSITIONS: "joint_positions", JOINT_VELOCITIES: "joint_velocities"}
@@ -45,7 +71,16 @@ def _params(cls, spec):
 
 
 def attach_ros2(resolved: Resolved, registry=None, params: dict | None = None) -> str:
-    """Add (once) a ``ros2_publisher`` to ``resolved``, wired by port role; update its params. Its name."""
+    """Add (once) a ``ros2_publisher`` to ``resolved``, wired by port role; update its params. Its name.
+    Adds (once) the command source too (:func:`attach_commands`), with the same domain and interface."""
+    shared = {k: v for k, v in (params or {}).items() if k in SHARED}
+    name = _attach_publisher(resolved, registry, params)
+    pub = resolved.components[name].params
+    attach_commands(resolved, registry, {**{k: pub[k] for k in SHARED if k in pub}, **shared})
+    return name
+
+
+def _attach_publisher(resolved: Resolved, registry=None, params: dict | None = None) -> str:
     from snakesim.components.sensors import ForceTorqueSensors, Imu
     from snakesim.components.viz.attach import provides_robot
     from snakesim.framework.registry import default_registry
@@ -97,6 +132,89 @@ def attach_ros2(resolved: Resolved, registry=None, params: dict | None = None) -
     fastest = max((r for r in rates.values() if r > 0), default=1.0)
     rate = 1.0 / (nearest_period(fastest, resolved.sim.dt) * resolved.sim.dt)
     resolved.components[name] = ComponentSpec(type="ros2_publisher", params=sink, rate=rate, uses=uses)
+    resolved.connections.extend((s, d, "--ros2") for s, d in conns)
+    resolved.where[name] = "--ros2"
+    return name
+
+
+def _existing(resolved: Resolved, type_name: str):
+    return next((n for n, s in resolved.components.items()
+                 if s.type == type_name and resolved.where.get(n) == "--ros2"), None)
+
+
+def attach_commands(resolved: Resolved, registry=None, params: dict | None = None,
+                    takeover: bool = False) -> str | None:
+    """Add (once) a ``ros2_commands`` source wired by declared ports (see the module docstring); update its
+    params. ``takeover``: replace the scene's connections into the PID's set-points. Its name, or None
+    when the scene has no robot or nothing to wire it to."""
+    from snakesim.components.control.pid import JointPid
+    from snakesim.components.multibody import Multibody
+    from snakesim.components.viz.attach import provides_robot
+    from snakesim.framework.registry import default_registry
+
+    registry = registry or default_registry()
+    existing = _existing(resolved, COMMANDS)
+    if existing is not None and not takeover:
+        spec = resolved.components[existing]
+        resolved.components[existing] = spec.model_copy(update={"params": {**spec.params, **(params or {})}})
+        return existing
+    robot = pid = None
+    gravity_ok = False
+    q_port = None
+    pid_params = None
+    for comp, spec, cls in _classes(resolved, registry):
+        if robot is None and provides_robot(cls):
+            robot = comp
+            q_port = next((p for p, o in cls.outputs.items() if o.role == JOINT_POSITIONS), None)
+            if isinstance(cls, type) and issubclass(cls, Multibody) and "gravity" in cls.inputs:
+                prm = _params(cls, spec)
+                gravity_ok = prm is not None and prm.gravity_input == "scale"
+        if pid is None and isinstance(cls, type) and issubclass(cls, JointPid):
+            pid, pid_params = comp, _params(cls, spec)
+    if robot is None:
+        return None
+    name = existing
+    if name is None:
+        name, k = COMMANDS, 1
+        while name in resolved.components:
+            name, k = f"{COMMANDS}_{k}", k + 1
+    into = {d for s, d, _ in resolved.connections if not s.startswith(f"{name}.")}
+    conns: list[tuple[str, str]] = []
+    cmd: dict = {}
+    if gravity_ok and f"{robot}.gravity" not in into:
+        conns.append((f"{name}.gravity", f"{robot}.gravity"))
+    cmd["gravity"] = bool(conns)
+    joints = False
+    if pid is not None:
+        targets = {f"{pid}.setpoint": f"{name}.setpoint", f"{pid}.rate_ref": f"{name}.rate"}
+        driven = [(s, d, w) for s, d, w in resolved.connections if d in targets]
+        if f"{pid}.setpoint" not in into or takeover:
+            for c in driven:
+                if takeover:
+                    log.info("--ros2-commands: %s -> %s (%s) replaced by %s", c[0], c[1], c[2], targets[c[1]])
+            resolved.connections[:] = [c for c in resolved.connections if c[1] not in targets]
+            conns += [(src, dst) for dst, src in targets.items()]
+            joints = True
+        else:
+            src = next(s for s, d, _ in driven if d == f"{pid}.setpoint")
+            log.info("%s: joint commands not accepted: the scene drives %s.setpoint from %s "
+                     "(--ros2-commands hands the set-points to ROS 2)", name, pid, src)
+        if pid_params is not None:
+            cmd["kind_modes"] = {k: g.mode for k, g in pid_params.kind_gains.items() if g.mode is not None}
+            cmd["modes"] = {k: g.mode for k, g in pid_params.gains.items() if g.mode is not None}
+    cmd["joints"] = joints
+    if not conns and existing is None:
+        return None                       # nothing to command: not added
+    if joints and q_port is not None:
+        conns.append((f"{robot}.{q_port}", f"{name}.q"))
+    cmd.update(params or {})
+    if existing is not None:
+        old = resolved.components[existing]
+        cmd = {**old.params, **cmd}
+        resolved.connections[:] = [c for c in resolved.connections
+                                   if not (c[2] == "--ros2" and (c[0].startswith(f"{name}.") or c[1].startswith(f"{name}.")))]
+    rate = 1.0 / (nearest_period(COMMANDS_RATE, resolved.sim.dt) * resolved.sim.dt)
+    resolved.components[name] = ComponentSpec(type=COMMANDS, params=cmd, rate=rate, uses={"robot": robot})
     resolved.connections.extend((s, d, "--ros2") for s, d in conns)
     resolved.where[name] = "--ros2"
     return name

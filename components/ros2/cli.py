@@ -6,6 +6,11 @@
                               no multicast); implies --ros2
     --ros2-rate TOPIC=HZ      per-topic rate (clock, joint_states, tf, imu, wrench; 0: off), repeatable;
                               implies --ros2
+    --ros2-commands           hand the PID's set-points to ROS 2 (/joint_commands, /joint_command): the
+                              scene's connections into pid.setpoint and pid.rate_ref are replaced by the
+                              ros2_commands source's; implies --ros2. Without it, --ros2 accepts joint
+                              commands only for a PID whose set-points the scene leaves unconnected
+                              (/enable_gravity is accepted whenever the multibody's gravity input is free)
 """
 
 from __future__ import annotations
@@ -62,6 +67,16 @@ def _rates(resolved, value):
         update={"rate": 1.0 / (nearest_period(fastest, dt) * dt)})
 
 
+def _commands(resolved, value):
+    if not value:
+        return
+    from .attach import attach_commands, attach_ros2
+
+    name = attach_ros2(resolved)
+    pub = resolved.components[name].params
+    attach_commands(resolved, params={k: pub[k] for k in ("domain_id", "interface") if k in pub}, takeover=True)
+
+
 @hookimpl(specname="snakesim_run_options")
 def ros2_run_options():
     return [
@@ -76,4 +91,7 @@ def ros2_run_options():
         (click.Option(["--ros2-rate"], multiple=True, default=None, metavar="TOPIC=HZ",
                       help="ROS 2 topic rate: clock, joint_states, tf, imu, wrench (0: off); repeatable; "
                            "implies --ros2."), _rates),
+        (click.Option(["--ros2-commands"], is_flag=True, default=None,
+                      help="Hand the PID's set-points to ROS 2 (/joint_commands JointTrajectory, /joint_command "
+                           "JointState), replacing the scene's set-point source; implies --ros2."), _commands),
     ]

@@ -132,10 +132,13 @@ WrenchStamped = ros_type("geometry_msgs/msg/WrenchStamped")
 TFMessage = ros_type("tf2_msgs/msg/TFMessage")
 JointState = ros_type("sensor_msgs/msg/JointState")
 Imu = ros_type("sensor_msgs/msg/Imu")
+JointTrajectoryPoint = ros_type("trajectory_msgs/msg/JointTrajectoryPoint")
+JointTrajectory = ros_type("trajectory_msgs/msg/JointTrajectory")
 
 #: every type above, by ROS name (what the tests check against rosbags)
 USED = {c.ros_name: c for c in (Time, Duration, Header, String, Bool, Float64, Clock, Vector3, Quaternion,
-                                Transform, TransformStamped, Wrench, WrenchStamped, TFMessage, JointState, Imu)}
+                                Transform, TransformStamped, Wrench, WrenchStamped, TFMessage, JointState, Imu,
+                                JointTrajectoryPoint, JointTrajectory)}
 
 
 def time_msg(t: float, out=None):

@@ -30,6 +30,8 @@ e.g. ``CYCLONEDDS_URI`` with :func:`cyclone_xml`'s text (the README gives it);
 from __future__ import annotations
 
 import os
+import threading
+import weakref
 from dataclasses import dataclass
 
 LOOPBACK = "127.0.0.1"
@@ -90,23 +92,49 @@ def dds_topic_name(topic: str) -> str:
     return f"rt/{name}"
 
 
+#: this process's Cyclone domains by id: (weak reference to the Domain, its interface). Cyclone allows one
+#: Domain object per id per process, so the publisher, the command source and a test's own participant
+#: share it; it is deleted when the last participant holding it goes.
+_DOMAINS: dict[int, tuple[weakref.ref, str]] = {}
+_DOMAINS_LOCK = threading.Lock()
+
+
+def shared_domain(domain_id: int, interface: str = LOOPBACK):
+    """The process's Cyclone ``Domain`` for ``domain_id`` (created with :func:`cyclone_xml` on first use).
+    An error when it exists with another interface (one configuration per domain per process)."""
+    from cyclonedds.domain import Domain
+
+    with _DOMAINS_LOCK:
+        ref, iface = _DOMAINS.get(domain_id, (None, None))
+        dom = ref() if ref is not None else None
+        if dom is not None:
+            if iface != interface:
+                raise ValueError(f"ROS 2 domain {domain_id} is already open in this process on interface "
+                                 f"'{iface}', not '{interface}'")
+            return dom
+        dom = Domain(domain_id, cyclone_xml(interface, domain_id))
+        _DOMAINS[domain_id] = (weakref.ref(dom), interface)
+        return dom
+
+
 class Ros2Participant:
     """One DDS participant on ``domain_id`` with ROS 2 topic, type and QoS conventions.
 
     ``writer(topic, MsgType)`` and ``reader(topic, MsgType)`` make endpoints;
     :meth:`close` (or the context manager) releases them. Cyclone's domain is
-    created here with :func:`cyclone_xml`, so the process's CYCLONEDDS_URI is
-    not used for it.
+    created with :func:`cyclone_xml` (:func:`shared_domain`: one per id per
+    process, shared by every participant on it), so the process's
+    CYCLONEDDS_URI is not used for it.
     """
 
     def __init__(self, domain_id: int | None = None, interface: str = LOOPBACK):
-        from cyclonedds.domain import Domain, DomainParticipant
+        from cyclonedds.domain import DomainParticipant
 
         self.domain_id = default_domain() if domain_id is None else int(domain_id)
         if not 0 <= self.domain_id <= 232:
             raise ValueError(f"ROS 2 domain id must be 0..232, got {self.domain_id}")
         self.interface = interface
-        self._domain = Domain(self.domain_id, cyclone_xml(interface, self.domain_id))
+        self._domain = shared_domain(self.domain_id, interface)
         self.participant = DomainParticipant(self.domain_id)
         self._topics: dict[str, object] = {}
         self._entities: list = []

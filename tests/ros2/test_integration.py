@@ -47,3 +47,76 @@ def test_joint_states_at_the_set_rate_and_clock_advancing(dds_domain):
     assert clock[-1] >= DURATION - 2 / RATE
     assert got["tf_count"] > 0 and got["tf_frames"][0][0] == "world"
     assert got["description_chars"] == len(robot.urdf)
+
+
+FALLING = """\
+description: a 3-module robot falling freely, joints held by position PIDs (set-points from ROS 2)
+sim: {duration: %(duration)s, dt: 0.001, integrator: rk4}
+components:
+  robot: {type: multibody, params: {design: eels-1.0, modules: 3}}
+  hold: {type: joint_setpoints}
+  pid: {type: joint_pid}
+connections:
+  - robot.joint_v -> pid.v
+  - robot.joint_q -> pid.q
+  - hold.setpoint -> pid.setpoint
+  - pid.tau -> robot.tau
+"""
+JOINT = "bend_01"
+
+
+def _accel(samples, t0, t1):
+    """Second-order coefficient ×2 of a quadratic fit of (t, z) in [t0, t1]: the vertical acceleration."""
+    import numpy as np
+
+    pts = np.array([(t, z) for t, z in samples if t0 <= t <= t1])
+    assert len(pts) >= 8, f"only {len(pts)} /tf samples in [{t0:.2f}, {t1:.2f}] s"
+    return 2 * np.polyfit(pts[:, 0] - t0, pts[:, 1], 2)[0]
+
+
+def test_commands_move_joints_toggle_gravity_and_malformed_are_rejected(dds_domain, tmp_path):
+    """A separate commander sets a joint, sees it move in /joint_states, turns gravity off and sees the fall
+    stop accelerating in /tf, sends every kind of malformed command and sees publishing go on (the joint
+    keeps its set-point); the run's log names each rejection."""
+    domain = dds_domain()
+    scene = tmp_path / "falling.yaml"
+    duration = 4.0
+    scene.write_text(FALLING % {"duration": duration})
+    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+    env.pop("CYCLONEDDS_URI", None)
+    cmd = subprocess.Popen([sys.executable, str(HERE / "commander.py"), str(domain), JOINT, "40"],
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    try:
+        assert json.loads(cmd.stdout.readline()) == {"ready": True}, cmd.stderr.read()
+        exe = Path(sys.executable).with_name("snakesim")
+        run = subprocess.run([str(exe), "run", str(scene), "--realtime", "--ros2-domain", str(domain),
+                              "--ros2-commands", "--ros2-rate", "tf=100", "--quiet", "--out", str(tmp_path / "out")],
+                             capture_output=True, text=True, timeout=90, env=env)
+        assert run.returncode == 0, run.stderr
+        out, err = cmd.communicate(timeout=30)
+    finally:
+        if cmd.poll() is None:
+            cmd.kill()
+            cmd.wait()
+    got = json.loads(out.strip().splitlines()[-1])
+    assert got["matched"], "the commander's writers never matched the run's readers"
+    # set-points: the joint moved to the commanded angle
+    assert got["moved_at"] is not None, f"{JOINT} never reached the set-point: {got['joint'][-3:]}"
+    # gravity: falling at g before, not accelerating after
+    t_off = got["gravity_off_at"]
+    assert t_off is not None
+    before = _accel(got["heights"], t_off - 0.4, t_off - 0.02)
+    after = _accel(got["heights"], t_off + 0.1, t_off + 0.4)
+    print(f"moved at {got['moved_at']:.3f} s, gravity off at {t_off:.3f} s: vertical acceleration {before:.2f} "
+          f"before, {after:.3f} m/s² after; {got['stamps_after_malformed']} /joint_states after the malformed")
+    assert before == pytest.approx(-9.81, abs=1.0) and abs(after) < 1.0, (before, after)
+    # malformed commands: rejected (logged, naming the field), the run went on, the joint held its set-point
+    t_bad = got["malformed_at"]
+    assert t_bad is not None and got["stamps_after_malformed"] >= 20
+    assert got["last_stamp"] >= duration - 0.05
+    late = [q for t, q in got["joint"] if t > t_bad + 0.2]
+    assert late and all(abs(q - 0.4) < 0.05 for q in late), late[-3:]
+    for reason in ("name[0] = 'no_such_joint' is not a joint", "position[0] (bend_01) = nan is not finite",
+                   "points[0].positions[0] (bend_01) = inf is not finite",
+                   "points[0].positions has 2 values for 1 joint_names", "header.stamp = 1e-09 s is stale"):
+        assert reason in run.stderr, f"no rejection '{reason}' in the run's log:\n{run.stderr[-3000:]}"

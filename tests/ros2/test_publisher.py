@@ -19,7 +19,7 @@ def test_attach_wires_by_role_and_publishes_at_each_topic_rate(dds_domain):
     resolved, reg = _scene()
     name = attach_ros2(resolved, reg, params={"domain_id": dds_domain(), "rates": {"tf": 25.0}})
     assert attach_ros2(resolved, reg, params={"world_frame": "odom"}) == name      # once; params merged
-    wired = {d.split(".")[1]: s for s, d, w in resolved.connections if w == "--ros2"}
+    wired = {d.split(".")[1]: s for s, d, w in resolved.connections if w == "--ros2" and d.startswith(f"{name}.")}
     assert wired == {"link_poses": "robot.link_poses", "joint_positions": "robot.joint_q",
                      "joint_velocities": "robot.joint_v"}
     s = Session(resolved, reg)
