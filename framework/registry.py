@@ -71,6 +71,14 @@ class Registry:
             raise RegistryError(f"unknown integrator '{name}'{_close(name, self.integrators)}; "
                                 f"valid: {', '.join(sorted(self.integrators))}") from None
 
+    def classes_in(self, resolved):
+        """(name, spec, class) of each component of a resolved configuration whose type is registered;
+        unknown types are skipped here (the build reports them, naming file and key). For run options
+        that add components by what the scene's classes declare (``--viz``, ``--ros2``)."""
+        for name, spec in resolved.components.items():
+            if spec.type in self.components:
+                yield name, spec, self.components[spec.type]
+
     def assembly_paths(self) -> list:
         paths = []
         for group in self.pm.hook.snakesim_assembly_paths():

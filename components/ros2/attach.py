@@ -55,13 +55,6 @@ IMU_ROLES = {IMU_ANGULAR_RATE: "imu_angular_rate", IMU_SPECIFIC_FORCE: "imu_spec
              IMU_ORIENTATION: "imu_orientation"}
 
 
-def _classes(resolved: Resolved, registry):
-    for name, spec in resolved.components.items():
-        try:
-            yield name, spec, registry.component(spec.type)
-        except Exception:            # unknown type: the build reports it, naming file and key
-            continue
-
 
 def _params(cls, spec):
     try:
@@ -100,7 +93,7 @@ def _attach_publisher(resolved: Resolved, registry=None, params: dict | None = N
     uses: dict = {}
     conns: list[tuple[str, str]] = []
     robot = efforts = imu = fts = None
-    for comp, spec, cls in _classes(resolved, registry):
+    for comp, spec, cls in registry.classes_in(resolved):
         outs = cls.outputs
         if robot is None and provides_robot(cls):
             robot = uses["robot"] = comp
@@ -162,7 +155,7 @@ def attach_commands(resolved: Resolved, registry=None, params: dict | None = Non
     gravity_ok = False
     q_port = None
     pid_params = None
-    for comp, spec, cls in _classes(resolved, registry):
+    for comp, spec, cls in registry.classes_in(resolved):
         if robot is None and provides_robot(cls):
             robot = comp
             q_port = next((p for p, o in cls.outputs.items() if o.role == JOINT_POSITIONS), None)

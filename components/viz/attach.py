@@ -81,13 +81,6 @@ def tether_lines(cls, params: dict) -> list[dict]:
     return [{"link": r.link, "offset": list(r.offset), "anchor": list(r.anchor)} for r in ropes]
 
 
-def _classes(resolved: Resolved, registry):
-    for name, spec in resolved.components.items():
-        try:
-            yield name, spec, registry.component(spec.type)
-        except Exception:            # unknown type: the build reports it, naming file and key
-            continue
-
 
 def viewer_period(dt: float, rates, target_hz: float = VIEWER_RATE_HZ) -> int:
     """Base steps per viewer frame: nearest to 1/(target·dt) whose tick pattern with
@@ -116,7 +109,7 @@ def attach_viewer(resolved: Resolved, target: VizTarget, registry=None, name: st
     uses = {}
     conns = []
     kinds = structured_inputs()
-    for comp, spec, cls in _classes(resolved, registry):
+    for comp, spec, cls in registry.classes_in(resolved):
         if found.robot is None and provides_robot(cls):
             found.robot = comp
             uses["robot"] = comp             # explicit: the scene may have several providers
