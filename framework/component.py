@@ -195,6 +195,16 @@ class Component(Generic[P]):
     def update(self, t: float, xd, u) -> None:
         raise NotImplementedError(f"{type(self).__name__} declares discrete state but no update()")
 
+    def hold(self, t: float, u) -> None:
+        """Optional: called once per base step, after the discrete updates of tick t and before the
+        integrator advances past t; it may block (a gate that holds the step loop: pause, single
+        steps, lockstep with an external controller). A component that overrides it is never pruned
+        and should bound its wait (a timeout that calls :meth:`stop`). Not called at the last tick."""
+
+    @classmethod
+    def has_hold(cls) -> bool:
+        return cls.hold is not Component.hold
+
     def integrate(self, x: np.ndarray, dx: np.ndarray, out: np.ndarray) -> None:
         """out = x ⊕ dx on the state's manifold; Euclidean by default."""
         np.add(x, dx, out=out)

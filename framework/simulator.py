@@ -6,15 +6,25 @@ At each base tick k (t = t0 + k·dt, never accumulated):
   2. the recorder copies the recorded ports; stop conditions are checked;
   3. discrete components due at this tick update their state (their outputs,
      computed in 1, are held until their next tick: zero-order hold);
+  3b. components with a ``hold()`` (gates: pause, single steps, lockstep) may hold
+     the loop here; with ``realtime`` the wall time held does not count as lag;
   4. the integrator advances the continuous state to t + dt, re-evaluating
      only the nodes continuous states depend on;
   5. non-finite state stops the run, naming the component, and keeps the last
      good state.
+
+``realtime`` paces simulated time to the wall clock; when the run falls behind
+by more than ``LAG_WARN_S`` it says so on logger ``snakesim.run`` (how far
+behind, at most once per ``LAG_WARN_EVERY_S`` of wall time) instead of
+drifting silently; the summary keeps the largest lag (``realtime_max_lag_s``). The
+first step's excess wall time (components opening lazily: DDS, first JIT calls)
+is not lag: pacing starts after it.
 """
 
 from __future__ import annotations
 
 import json
+import logging
 import math
 import time
 from dataclasses import dataclass, field
@@ -24,6 +34,10 @@ import numpy as np
 
 from .errors import SnakesimError
 from .recorder import Recorder
+
+logger = logging.getLogger("snakesim.run")
+LAG_WARN_S = 0.1            # s behind the wall clock before a --realtime run warns
+LAG_WARN_EVERY_S = 5.0      # s of wall time between two lag warnings
 
 
 @dataclass
@@ -71,8 +85,12 @@ class Simulator:
         flag.reason = flag.source = None
         stop_reason, bad = None, None
         isfinite, copyto = math.isfinite, np.copyto
+        holds = plan.holds
         wall0 = time.perf_counter()
         next_report = wall0 + 0.5
+        held = 0.0                # wall s spent in holds (not lag for realtime pacing)
+        warmup = 0.0              # wall s the first step took beyond dt (lazy opening; not lag either)
+        max_lag, next_lag_warn = 0.0, wall0
         t_good = t = t0
         k = 0
         for k in range(n_steps + 1):
@@ -92,6 +110,11 @@ class Simulator:
                 break
             for fn, xd, u in updates[phase]:
                 fn(t, xd, u)
+            if holds:
+                h0 = time.perf_counter()
+                for fn, u in holds:
+                    fn(t, u)
+                held += time.perf_counter() - h0
             if has_cont:
                 try:
                     advance(t, t + dt, DX)
@@ -119,9 +142,20 @@ class Simulator:
                     progress(t, t0 + n_steps * dt)
                     next_report = now + 0.5
             if realtime:
-                ahead = (t + dt - t0) - (time.perf_counter() - wall0)
+                now = time.perf_counter()
+                ahead = (t + dt - t0) - (now - wall0 - held - warmup)
+                if k == 0 and ahead < 0:
+                    # the first step opens what components open lazily (DDS, first JIT calls): not lag
+                    warmup, ahead = -ahead, 0.0
                 if ahead > 0:
                     time.sleep(ahead)
+                else:
+                    max_lag = max(max_lag, -ahead)
+                    if -ahead > LAG_WARN_S and now >= next_lag_warn:
+                        logger.warning("realtime: %.3g s behind the wall clock at t = %.6g s "
+                                       "(real-time factor %.3g so far)", -ahead, t + dt,
+                                    (t + dt - t0) / max(now - wall0 - held - warmup, 1e-9))
+                        next_lag_warn = now + LAG_WARN_EVERY_S
         wall = time.perf_counter() - wall0
         sim_time = (t - t0)
         summary = {
@@ -135,6 +169,10 @@ class Simulator:
             "completed": stop_reason is None,
             "integrator": {"name": integ.name, **integ.stats} if has_cont else None,
         }
+        if holds:
+            summary["held_wall_time_s"] = held
+        if realtime:
+            summary["realtime_max_lag_s"] = max_lag
         last_good = None
         if bad:
             last_good = {"t": t_good, "X": X_good.copy(), "XD": XD_good.copy(),

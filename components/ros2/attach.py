@@ -45,6 +45,7 @@ from .publisher import DEFAULT_RATES
 
 log = logging.getLogger("snakesim.ros2")
 COMMANDS = "ros2_commands"
+SIM_CONTROL = "ros2_sim_control"
 COMMANDS_RATE = 100.0          # Hz, how often the command topics are polled (rounded to whole base steps)
 #: publisher params the command source shares
 SHARED = ("domain_id", "interface")
@@ -69,7 +70,26 @@ def attach_ros2(resolved: Resolved, registry=None, params: dict | None = None) -
     shared = {k: v for k, v in (params or {}).items() if k in SHARED}
     name = _attach_publisher(resolved, registry, params)
     pub = resolved.components[name].params
-    attach_commands(resolved, registry, {**{k: pub[k] for k in SHARED if k in pub}, **shared})
+    both = {**{k: pub[k] for k in SHARED if k in pub}, **shared}
+    attach_commands(resolved, registry, both)
+    attach_sim_control(resolved, both)
+    return name
+
+
+def attach_sim_control(resolved: Resolved, params: dict | None = None) -> str:
+    """Add (once) a ``ros2_sim_control`` gate (/sim/pause, /sim/step, lockstep) at the command source's
+    rate; update its params. Its name."""
+    existing = _existing(resolved, SIM_CONTROL)
+    if existing is not None:
+        spec = resolved.components[existing]
+        resolved.components[existing] = spec.model_copy(update={"params": {**spec.params, **(params or {})}})
+        return existing
+    name, k = SIM_CONTROL, 1
+    while name in resolved.components:
+        name, k = f"{SIM_CONTROL}_{k}", k + 1
+    rate = 1.0 / (nearest_period(COMMANDS_RATE, resolved.sim.dt) * resolved.sim.dt)
+    resolved.components[name] = ComponentSpec(type=SIM_CONTROL, params=dict(params or {}), rate=rate)
+    resolved.where[name] = "--ros2"
     return name
 
 

@@ -4,13 +4,21 @@
     --ros2-domain N           DDS domain id (default ROS_DOMAIN_ID, else 0); implies --ros2
     --ros2-interface IF       network interface or address (default 127.0.0.1: this machine only,
                               no multicast); implies --ros2
-    --ros2-rate TOPIC=HZ      per-topic rate (clock, joint_states, tf, imu, wrench; 0: off), repeatable;
+    --ros2-rate TOPIC=HZ      per-topic rate (clock, joint_states, tf, imu, wrench, real_time_factor;
+                              0: off), repeatable;
                               implies --ros2
     --ros2-commands           hand the PID's set-points to ROS 2 (/joint_commands, /joint_command): the
                               scene's connections into pid.setpoint and pid.rate_ref are replaced by the
                               ros2_commands source's; implies --ros2. Without it, --ros2 accepts joint
                               commands only for a PID whose set-points the scene leaves unconnected
                               (/enable_gravity is accepted whenever the multibody's gravity input is free)
+    --ros2-lockstep           the run holds at each control period (100 Hz) until a command or a
+                              /sim/step arrives (:mod:`.sim_control`); implies --ros2
+    --ros2-paused             start held at t0 (/sim/pause false or /sim/step N to go on); implies --ros2
+    --ros2-hold-timeout S     stop the run after S wall seconds held with no request (default 0: wait
+                              for ever); implies --ros2
+
+--ros2 always adds the ros2_sim_control gate: /sim/pause (std_msgs/Bool), /sim/step (std_msgs/UInt32).
 """
 
 from __future__ import annotations
@@ -65,6 +73,9 @@ def _rates(resolved, value):
     dt = resolved.sim.dt
     resolved.components[name] = resolved.components[name].model_copy(
         update={"rate": 1.0 / (nearest_period(fastest, dt) * dt)})
+    from .mcap_recorder import sync_recorder
+
+    sync_recorder(resolved, name)          # a --ros2-mcap recorder mirrors the publisher's rates
 
 
 def _commands(resolved, value):
@@ -77,21 +88,42 @@ def _commands(resolved, value):
     attach_commands(resolved, params={k: pub[k] for k in ("domain_id", "interface") if k in pub}, takeover=True)
 
 
+def _sim(**params):
+    def apply(resolved, value):
+        if value is None or value is False:
+            return
+        from .attach import attach_ros2, attach_sim_control
+
+        attach_ros2(resolved)
+        attach_sim_control(resolved, {k: (value if v is None else v) for k, v in params.items()})
+    return apply
+
+
 @hookimpl(specname="snakesim_run_options")
 def ros2_run_options():
     return [
         (click.Option(["--ros2"], is_flag=True, default=None,
-                      help="Publish the robot on ROS 2 (Cyclone DDS; /clock, /joint_states, /tf, "
-                           "/robot_description, /imu and /fts/* when present); loopback only by default."), _ros2),
+                      help="Publish the robot on ROS 2 (Cyclone DDS; /clock, /joint_states, /tf, /tf_static, "
+                           "/robot_description, /sim/real_time_factor, /imu and /fts/* when present; "
+                           "/sim/pause and /sim/step accepted); loopback only by default."), _ros2),
         (click.Option(["--ros2-domain"], type=click.IntRange(0, 232), default=None,
                       help="ROS 2 domain id (default: ROS_DOMAIN_ID, else 0); implies --ros2."), _domain),
         (click.Option(["--ros2-interface"], default=None,
                       help="Network interface or address for ROS 2 (default 127.0.0.1: this machine only, "
                            "no multicast); implies --ros2."), _interface),
         (click.Option(["--ros2-rate"], multiple=True, default=None, metavar="TOPIC=HZ",
-                      help="ROS 2 topic rate: clock, joint_states, tf, imu, wrench (0: off); repeatable; "
+                      help="ROS 2 topic rate: clock, joint_states, tf, imu, wrench, real_time_factor (0: off); repeatable; "
                            "implies --ros2."), _rates),
         (click.Option(["--ros2-commands"], is_flag=True, default=None,
                       help="Hand the PID's set-points to ROS 2 (/joint_commands JointTrajectory, /joint_command "
                            "JointState), replacing the scene's set-point source; implies --ros2."), _commands),
+        (click.Option(["--ros2-lockstep"], is_flag=True, default=None,
+                      help="Hold the run at each control period until a ROS 2 command or /sim/step arrives "
+                           "(the world never runs ahead of the autonomy); implies --ros2."), _sim(lockstep=True)),
+        (click.Option(["--ros2-paused"], is_flag=True, default=None,
+                      help="Start held at t0 until /sim/pause false or /sim/step N; implies --ros2."),
+         _sim(start_paused=True)),
+        (click.Option(["--ros2-hold-timeout"], type=click.FloatRange(min=0), default=None, metavar="S",
+                      help="Stop the run after S wall seconds held with no ROS 2 request (0: wait for ever); "
+                           "implies --ros2."), _sim(hold_timeout=None)),
     ]

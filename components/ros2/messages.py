@@ -122,6 +122,7 @@ Header = ros_type("std_msgs/msg/Header")
 String = ros_type("std_msgs/msg/String")
 Bool = ros_type("std_msgs/msg/Bool")
 Float64 = ros_type("std_msgs/msg/Float64")
+UInt32 = ros_type("std_msgs/msg/UInt32")
 Clock = ros_type("rosgraph_msgs/msg/Clock")
 Vector3 = ros_type("geometry_msgs/msg/Vector3")
 Quaternion = ros_type("geometry_msgs/msg/Quaternion")
@@ -136,7 +137,7 @@ JointTrajectoryPoint = ros_type("trajectory_msgs/msg/JointTrajectoryPoint")
 JointTrajectory = ros_type("trajectory_msgs/msg/JointTrajectory")
 
 #: every type above, by ROS name (what the tests check against rosbags)
-USED = {c.ros_name: c for c in (Time, Duration, Header, String, Bool, Float64, Clock, Vector3, Quaternion,
+USED = {c.ros_name: c for c in (Time, Duration, Header, String, Bool, Float64, UInt32, Clock, Vector3, Quaternion,
                                 Transform, TransformStamped, Wrench, WrenchStamped, TFMessage, JointState, Imu,
                                 JointTrajectoryPoint, JointTrajectory)}
 

@@ -16,7 +16,13 @@ Topics (QoS: :mod:`.transport`; types: :mod:`.messages`):
                                                    effort when params.effort (joint_efforts wired)
     /tf                 tf2_msgs/TFMessage         every link's pose as a transform from params.world_frame
                                                    (a star: parent world_frame for every link, not the URDF
-                                                   chain), child_frame_id = link name
+                                                   chain), child_frame_id = link name; links on /tf_static
+                                                   left out (one parent per frame, as tf2 requires)
+    /tf_static          tf2_msgs/TFMessage         when params.tf_static: every URDF fixed joint's child
+                                                   link relative to its parent link (the joint origin),
+                                                   once, transient local (latched), stamped at the first tick
+    /sim/real_time_factor  std_msgs/Float64        sim s per wall s over the last window (rates.real_time_factor,
+                                                   default 1 Hz; from the second window on)
     /robot_description  std_msgs/String            robot.urdf, once, transient local (latched)
     /imu                sensor_msgs/Imu            when params.imu_frame: frame_id that link, covariances
                                                    diag(imu_gyro_noise²), diag(imu_accel_noise²), orientation
@@ -54,7 +60,9 @@ from snakesim.framework.rates import period_of
 from .template import CdrTemplate, RawWriter
 from .transport import LOOPBACK
 
-TOPICS = ("clock", "joint_states", "tf", "imu", "wrench")
+TOPICS = ("clock", "joint_states", "tf", "imu", "wrench", "real_time_factor")
+RTF_TOPIC = "/sim/real_time_factor"
+RTF_RATE = 1.0          # Hz, default rate of /sim/real_time_factor
 DEFAULT_RATES = {"clock": 100.0, "joint_states": 100.0, "tf": 50.0, "imu": 100.0, "wrench": 100.0}
 
 
@@ -68,6 +76,8 @@ class Ros2PublisherParams(Params):
     world_frame: str = Field("world", description="parent frame of every link in /tf")
     effort: bool = Field(False, description="publish JointState.effort from joint_efforts (wired)")
     robot_description: bool = Field(True, description="publish robot.urdf on /robot_description (latched)")
+    tf_static: bool = Field(True, description="publish the URDF's fixed joints on /tf_static (latched) and "
+                                              "leave their child links out of /tf")
     imu_frame: str | None = Field(None, description="publish /imu with this frame_id (IMU inputs wired)")
     imu_gyro_noise: float = Field(0.0, ge=0, description="rad/s, for the covariance")
     imu_accel_noise: float = Field(0.0, ge=0, description="m/s², for the covariance")
@@ -111,6 +121,12 @@ class Ros2Publisher(Component[Ros2PublisherParams]):
         else:
             self.wrench_joints, self.wrench_links = [], []
         rates = {**DEFAULT_RATES, **p.rates}
+        rtf = rates.pop("real_time_factor", RTF_RATE)
+        self.static = ([j for j in robot.tree.joints if j.type == "fixed"]
+                       if p.tf_static and robot is not None and self.nl else [])
+        static_links = {j.child for j in self.static}
+        #: rows of link_poses published on /tf (links on /tf_static are not)
+        self.tf_rows = np.array([i for i, ln in enumerate(self.links) if ln not in static_links], dtype=np.intp)
         on = {"clock": True, "joint_states": self.nj > 0, "tf": self.nl > 0, "imu": p.imu_frame is not None,
               "wrench": bool(self.wrench_joints)}
         self.topic_rates = {k: r for k, r in rates.items() if on[k] and r > 0}
@@ -119,6 +135,9 @@ class Ros2Publisher(Component[Ros2PublisherParams]):
         tick = 1.0 / self.rate
         self.periods = {k: period_of(r, tick, f"{self.name}: rates.{k} (at the component's {self.rate:g} Hz):")
                         for k, r in self.topic_rates.items()}
+        # not a templated topic (not in topic_rates): a low-rate Float64 computed from the wall clock
+        self.rtf_period = (period_of(rtf, tick, f"{self.name}: rates.real_time_factor (at the component's "
+                                                f"{self.rate:g} Hz):") if rtf > 0 else 0)
 
     def make_cache(self, x, u, y) -> "PublisherRun":
         """This run's message templates (their bytes are patched each publish) and DDS state."""
@@ -143,15 +162,19 @@ class Ros2Publisher(Component[Ros2PublisherParams]):
                 fields["effort"] = (lambda m, v: setattr(m, "effort", list(v)), self.nj)
             out["joint_states"] = ("/joint_states", M.JointState, CdrTemplate.of(msg, fields, [stamp]))
         if "tf" in self.topic_rates:
-            msg = M.TFMessage(transforms=[M.TransformStamped(header=M.Header(frame_id=p.world_frame), child_frame_id=ln)
-                                          for ln in self.links])
+            rows = self.tf_rows
+            msg = M.TFMessage(transforms=[M.TransformStamped(header=M.Header(frame_id=p.world_frame),
+                                                             child_frame_id=self.links[i]) for i in rows])
 
             def poses(m, v):
                 for tr, row in zip(m.transforms, np.asarray(v).reshape(-1, 7)):
                     tr.transform = M.Transform(translation=M.Vector3(*row[:3]), rotation=M.Quaternion(*row[3:]))
 
-            stamps = [(lambda m, tm, i=i: setattr(m.transforms[i].header, "stamp", tm)) for i in range(self.nl)]
-            out["tf"] = ("/tf", M.TFMessage, CdrTemplate.of(msg, {"poses": (poses, 7 * self.nl)}, stamps))
+            stamps = [(lambda m, tm, i=i: setattr(m.transforms[i].header, "stamp", tm)) for i in range(len(rows))]
+            tpl = CdrTemplate.of(msg, {"poses": (poses, 7 * len(rows))}, stamps)
+            if len(rows) < self.nl:                  # set_floats gets every link's pose: keep the /tf rows
+                tpl.selection["poses"] = (7 * rows[:, None] + np.arange(7)).ravel()
+            out["tf"] = ("/tf", M.TFMessage, tpl)
         if "imu" in self.topic_rates:
             cov_g = list(np.diag(np.full(3, p.imu_gyro_noise ** 2)).ravel())
             cov_a = list(np.diag(np.full(3, p.imu_accel_noise ** 2)).ravel())
@@ -188,6 +211,14 @@ class Ros2Publisher(Component[Ros2PublisherParams]):
 
             w = dds.writer("/robot_description", M.String)
             w.write(M.String(data=self.robot.urdf))
+        if self.static:
+            from . import messages as M
+
+            dds.writer("/tf_static", M.TFMessage).write(self.static_message(run.now))
+        if self.rtf_period:
+            from . import messages as M
+
+            run.rtf = (self.rtf_period, dds.writer(RTF_TOPIC, M.Float64), M.Float64)
         inputs = {"joint_states": [("position", u.joint_positions), ("velocity", u.joint_velocities)]
                         + ([("effort", u.joint_efforts)] if p.effort else []),
                         "tf": [("poses", u.link_poses)],
@@ -206,6 +237,7 @@ class Ros2Publisher(Component[Ros2PublisherParams]):
         run = u.cache
         if run.dds is None:
             wall = time.perf_counter()
+            run.now = t
             self._open(run, u)
             run.open_time = time.perf_counter() - wall
         wall = time.perf_counter()
@@ -224,8 +256,38 @@ class Ros2Publisher(Component[Ros2PublisherParams]):
                         tpl.set_floats(field, arr.reshape(-1))
                 writer.write(tpl.buf)
             run.published[key] += 1
+        if run.rtf is not None and tick % run.rtf[0] == 0:
+            self._publish_rtf(run, t)
         run.tick = tick + 1
         run.publish_time += time.perf_counter() - wall
+
+
+    def _publish_rtf(self, run: "PublisherRun", t: float) -> None:
+        now = time.perf_counter()
+        if run.rtf_last is not None:
+            t0, w0 = run.rtf_last
+            if now > w0:
+                _, writer, Float64 = run.rtf
+                run.real_time_factor = (t - t0) / (now - w0)
+                writer.write(Float64(data=run.real_time_factor))
+                run.published["real_time_factor"] = run.published.get("real_time_factor", 0) + 1
+        run.rtf_last = (t, now)
+
+    def static_message(self, t: float = 0.0):
+        """/tf_static: each URDF fixed joint's child link in its parent link's frame (the joint's origin)."""
+        from scipy.spatial.transform import Rotation
+
+        from . import messages as M
+
+        stamp = M.time_msg(max(t, 0.0))
+        out = []
+        for j in self.static:
+            q = Rotation.from_matrix(np.asarray(j.rotation, dtype=float)).as_quat()       # x, y, z, w
+            out.append(M.TransformStamped(
+                header=M.Header(stamp=stamp, frame_id=j.parent), child_frame_id=j.child,
+                transform=M.Transform(translation=M.Vector3(*map(float, j.translation)),
+                                      rotation=M.Quaternion(*map(float, q)))))
+        return M.TFMessage(transforms=out)
 
 
 @dataclasses.dataclass(eq=False)
@@ -242,6 +304,10 @@ class PublisherRun:
     publish_time: float = 0.0             # wall s spent publishing (the interface's cost per tick)
     open_time: float = 0.0                # wall s to open the participant and writers (first tick)
     finalizer: object = None
+    now: float = 0.0                      # sim time of the first tick (the /tf_static stamp)
+    rtf: tuple | None = None              # (period in ticks, writer, Float64) of /sim/real_time_factor
+    rtf_last: tuple | None = None         # (sim t, wall s) at the last real-time-factor tick
+    real_time_factor: float | None = None
 
     def close(self) -> None:
         """Close the participant now (otherwise when the run's cache is dropped)."""

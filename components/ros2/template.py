@@ -42,6 +42,8 @@ class CdrTemplate:
         self.float_index = float_index
         self.sec_index = sec_index
         self.nsec_index = sec_index + 1
+        #: name -> indices into the values given to set_floats (e.g. the rows a message keeps); default all
+        self.selection: dict[str, np.ndarray] = {}
 
     @classmethod
     def of(cls, msg, float_fields: dict, stamp_setters=()) -> "CdrTemplate":
@@ -73,8 +75,9 @@ class CdrTemplate:
         return cls(buf, index, secs)
 
     def set_floats(self, name: str, values) -> None:
-        """Write ``values`` (flattened, float64) into field ``name``."""
-        self._f[self.float_index[name]] = values
+        """Write ``values`` (flattened, float64; ``values[selection[name]]`` when set) into field ``name``."""
+        sel = self.selection.get(name)
+        self._f[self.float_index[name]] = values if sel is None else values[sel]
 
     def set_stamp(self, sec: int, nanosec: int) -> None:
         u = self._u

@@ -77,7 +77,8 @@ def _accel(samples, t0, t1):
 def test_commands_move_joints_toggle_gravity_and_malformed_are_rejected(dds_domain, tmp_path):
     """A separate commander sets a joint, sees it move in /joint_states, turns gravity off and sees the fall
     stop accelerating in /tf, sends every kind of malformed command and sees publishing go on (the joint
-    keeps its set-point); the run's log names each rejection."""
+    keeps its set-point); the run's log names each rejection. Then it pauses the run, steps it exactly N
+    base steps (/clock advances by N·dt) and resumes it."""
     domain = dds_domain()
     scene = tmp_path / "falling.yaml"
     duration = 4.0
@@ -120,3 +121,11 @@ def test_commands_move_joints_toggle_gravity_and_malformed_are_rejected(dds_doma
                    "points[0].positions[0] (bend_01) = inf is not finite",
                    "points[0].positions has 2 values for 1 joint_names", "header.stamp = 1e-09 s is stale"):
         assert reason in run.stderr, f"no rejection '{reason}' in the run's log:\n{run.stderr[-3000:]}"
+    # pause, step exactly N base steps (dt = 1 ms), resume: /clock holds, then advances by exactly N·dt
+    assert got["paused_at_ns"] is not None and got["stepped_to_ns"] is not None, got
+    assert got["paused_at_ns"] > t_bad * 1e9
+    assert got["stepped_to_ns"] - got["paused_at_ns"] == got["steps"] * 1_000_000, \
+        (got["paused_at_ns"], got["stepped_to_ns"])
+    assert got["resumed"] and got["clock_after_resume_ns"] > got["stepped_to_ns"]
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert summary["completed"] and summary["held_wall_time_s"] >= 0.5

@@ -1,5 +1,7 @@
 """The ros2_publisher sink in process: --ros2 wiring by role, per-topic rates, the cost of publishing."""
 
+import time
+
 import pytest
 
 from snakesim.framework.assembly import resolve
@@ -46,3 +48,60 @@ def test_unknown_topic_rate_is_an_error(dds_domain):
     attach_ros2(resolved, reg, params={"domain_id": dds_domain(), "rates": {"joints": 10.0}})
     with pytest.raises((SnakesimError, ValueError), match="unknown topics"):
         Session(resolved, reg)
+
+
+def test_tf_static_has_the_fixed_joints_and_tf_leaves_their_links_out(dds_domain):
+    import numpy as np
+    from scipy.spatial.transform import Rotation
+
+    from snakesim.components.ros2 import messages as M
+    from snakesim.components.ros2.attach import attach_ros2
+    from snakesim.components.ros2.transport import Ros2Participant
+
+    domain = dds_domain()
+    resolved, reg = _scene(duration=0.05)
+    name = attach_ros2(resolved, reg, params={"domain_id": domain, "rates": {"real_time_factor": 20.0}})
+    s = Session(resolved, reg)
+    pub = s.plan.components[name]
+    fixed = [j for j in pub.robot.tree.joints if j.type == "fixed"]
+    assert fixed, "the test robot has fixed joints (head, imu, cameras, lidar)"
+    static_links = {j.child for j in fixed}
+    assert [pub.links[i] for i in pub.tf_rows] == [ln for ln in pub.links if ln not in static_links]
+    s.run()
+    run = s.plan.caches[name]
+    # latched: a reader that joins after the run's first tick still gets it
+    with Ros2Participant(domain) as dds:
+        reader = dds.reader("/tf_static", M.TFMessage)
+        msgs = []
+        end = time.monotonic() + 5
+        while not msgs and time.monotonic() < end:
+            msgs = [m for m in reader.take(N=10) if isinstance(m, M.TFMessage)]
+            time.sleep(0.01)
+    run.close()
+    assert len(msgs) == 1
+    got = {tr.child_frame_id: tr for tr in msgs[0].transforms}
+    assert set(got) == static_links
+    for j in fixed:
+        tr = got[j.child]
+        assert tr.header.frame_id == j.parent
+        v = tr.transform.translation
+        assert np.allclose([v.x, v.y, v.z], j.translation)
+        q = tr.transform.rotation
+        assert np.allclose(Rotation.from_quat([q.x, q.y, q.z, q.w]).as_matrix(), j.rotation, atol=1e-12)
+    # the /tf template: only the non-static links, with their own rows of link_poses
+    tpl = run.templates["tf"][2]
+    assert len(tpl.selection["poses"]) == 7 * len(pub.tf_rows)
+
+
+def test_real_time_factor_is_published_at_its_rate(dds_domain):
+    from snakesim.components.ros2.attach import attach_ros2
+
+    resolved, reg = _scene(duration=0.3)
+    name = attach_ros2(resolved, reg, params={"domain_id": dds_domain(), "rates": {"real_time_factor": 20.0}})
+    s = Session(resolved, reg)
+    s.run()
+    run = s.plan.caches[name]
+    # ticks every 0.05 s: 0, 0.05, ..., 0.3 -> 7 ticks, published from the second on
+    assert run.published["real_time_factor"] in (5, 6)
+    assert run.real_time_factor > 0
+    run.close()
