@@ -72,9 +72,9 @@ from snakesim.components.control.joint_selection import per_joint
 from snakesim.components.control.pid import DEFAULT_GAINS, Mode
 from snakesim.components.multibody.robot_model import RobotModel
 from snakesim.components.port_roles import JOINT_POSITIONS
-from snakesim.framework import Component, Input, Output, Params, Uses
+from snakesim.framework import Component, Input, Output, Uses
 
-from .transport import LOOPBACK
+from .transport import DdsEndpoint
 
 log = logging.getLogger("snakesim.ros2")
 
@@ -83,10 +83,7 @@ JOINT_TOPIC = "/joint_command"
 GRAVITY_TOPIC = "/enable_gravity"
 
 
-class Ros2CommandsParams(Params):
-    domain_id: int | None = Field(None, ge=0, le=232, description="DDS domain (default: ROS_DOMAIN_ID, else 0)")
-    interface: str = Field(LOOPBACK, description="network interface name or address; 127.0.0.1 (default): "
-                                                 "this machine only, no multicast")
+class Ros2CommandsParams(DdsEndpoint):
     joints: bool = Field(True, description=f"accept joint set-points ({TRAJECTORY_TOPIC}, {JOINT_TOPIC})")
     gravity: bool = Field(True, description=f"accept {GRAVITY_TOPIC}")
     kind_modes: dict[str, Mode] = Field(default_factory=dict,
@@ -139,7 +136,7 @@ class Ros2Commands(Component[Ros2CommandsParams]):
         explicit = per_joint(names, p.modes, f"{self.name}: modes")
         modes = [m if m is not None else p.kind_modes.get(k, DEFAULT_GAINS[k]["mode"])
                  for k, m in zip(robot.joint_kinds, explicit)]
-        self.velocity_mask = vel = np.array([m == "velocity" for m in modes], dtype=bool)
+        self.velocity_mask = np.array([m == "velocity" for m in modes], dtype=bool)
         init = np.array(per_joint(names, p.initial, f"{self.name}: initial", 0.0), dtype=float)
         if not np.all(np.isfinite(init)):
             raise ValueError(f"{self.name}: initial values must be finite")

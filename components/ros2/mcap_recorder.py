@@ -136,15 +136,7 @@ class Ros2McapRecorder(Ros2Publisher):
             cid = f.channel("/robot_description", M.String.ros_name, latched=True)
             raw = M.String(data=self.robot.urdf).serialize()
             McapChannel(run, cid).write(raw.ljust((len(raw) + 3) & ~3, b"\0"))     # as DataWriter.write pads it
-        inputs = {"joint_states": [("position", u.joint_positions), ("velocity", u.joint_velocities)]
-                  + ([("effort", u.joint_efforts)] if p.effort else []),
-                  "tf": [("poses", u.link_poses)],
-                  "imu": [("orientation", u.imu_orientation), ("angular_velocity", u.imu_angular_rate),
-                          ("linear_acceleration", u.imu_specific_force)]}
-        run.wrenches = u.sensor_wrenches
-        run.plan = tuple((key, self.periods[key], tuple(writers[key]), tuple(inputs.get(key, ())))
-                         for key in self.topic_rates)
-        run.tick = 0
+        self._schedule(run, writers, u)
         run.dds = f
         run.next_flush = time.monotonic() + p.flush_period
         run.finalizer = weakref.finalize(run, f.close)       # also at interpreter exit

@@ -54,11 +54,11 @@ from pydantic import Field
 from snakesim.components.multibody.robot_model import RobotModel
 from snakesim.components.port_roles import (IMU_ANGULAR_RATE, IMU_ORIENTATION, IMU_SPECIFIC_FORCE, JOINT_EFFORTS,
                                             JOINT_POSITIONS, JOINT_VELOCITIES, LINK_POSES, SENSOR_WRENCHES)
-from snakesim.framework import Component, Input, Params, Uses
+from snakesim.framework import Component, Input, Uses
 from snakesim.framework.rates import period_of
 
 from .template import CdrTemplate, RawWriter
-from .transport import LOOPBACK
+from .transport import DdsEndpoint
 
 TOPICS = ("clock", "joint_states", "tf", "imu", "wrench", "real_time_factor")
 RTF_TOPIC = "/sim/real_time_factor"
@@ -66,10 +66,7 @@ RTF_RATE = 1.0          # Hz, default rate of /sim/real_time_factor
 DEFAULT_RATES = {"clock": 100.0, "joint_states": 100.0, "tf": 50.0, "imu": 100.0, "wrench": 100.0}
 
 
-class Ros2PublisherParams(Params):
-    domain_id: int | None = Field(None, ge=0, le=232, description="DDS domain (default: ROS_DOMAIN_ID, else 0)")
-    interface: str = Field(LOOPBACK, description="network interface name or address; 127.0.0.1 (default): "
-                                                 "this machine only, no multicast")
+class Ros2PublisherParams(DdsEndpoint):
     rates: dict[str, float] = Field(default_factory=dict,
                                     description=f"Hz per topic ({', '.join(TOPICS)}); default {DEFAULT_RATES}; "
                                                 "0 turns a topic off")
@@ -219,18 +216,22 @@ class Ros2Publisher(Component[Ros2PublisherParams]):
             from . import messages as M
 
             run.rtf = (self.rtf_period, dds.writer(RTF_TOPIC, M.Float64), M.Float64)
+        self._schedule(run, writers, u)
+        run.dds = dds
+        run.finalizer = weakref.finalize(run, dds.close)
+
+    def _schedule(self, run: "PublisherRun", writers: dict, u) -> None:
+        """What each tick writes: (topic key, period, writers, (field, input array)...) in a flat tuple,
+        so the per-tick loop reads no dicts. Shared by every sink that sends these messages."""
         inputs = {"joint_states": [("position", u.joint_positions), ("velocity", u.joint_velocities)]
-                        + ([("effort", u.joint_efforts)] if p.effort else []),
-                        "tf": [("poses", u.link_poses)],
-                        "imu": [("orientation", u.imu_orientation), ("angular_velocity", u.imu_angular_rate),
-                                ("linear_acceleration", u.imu_specific_force)]}
+                  + ([("effort", u.joint_efforts)] if self.p.effort else []),
+                  "tf": [("poses", u.link_poses)],
+                  "imu": [("orientation", u.imu_orientation), ("angular_velocity", u.imu_angular_rate),
+                          ("linear_acceleration", u.imu_specific_force)]}
         run.wrenches = u.sensor_wrenches
-        # (key, period, writers, inputs) in a flat tuple: the per-tick loop reads no dicts
         run.plan = tuple((key, self.periods[key], tuple(writers[key]), tuple(inputs.get(key, ())))
                          for key in self.topic_rates)
         run.tick = 0
-        run.dds = dds
-        run.finalizer = weakref.finalize(run, dds.close)
 
     # -- the per-tick path ----------------------------------------------------------------------
     def update(self, t, xd, u):

@@ -44,10 +44,10 @@ import weakref
 
 from pydantic import Field
 
-from snakesim.framework import Component, Params
+from snakesim.framework import Component
 
 from .commands import GRAVITY_TOPIC, JOINT_TOPIC, TRAJECTORY_TOPIC
-from .transport import LOOPBACK
+from .transport import DdsEndpoint
 
 log = logging.getLogger("snakesim.ros2")
 
@@ -55,10 +55,7 @@ PAUSE_TOPIC = "/sim/pause"
 STEP_TOPIC = "/sim/step"
 
 
-class Ros2SimControlParams(Params):
-    domain_id: int | None = Field(None, ge=0, le=232, description="DDS domain (default: ROS_DOMAIN_ID, else 0)")
-    interface: str = Field(LOOPBACK, description="network interface name or address; 127.0.0.1 (default): "
-                                                 "this machine only, no multicast")
+class Ros2SimControlParams(DdsEndpoint):
     lockstep: bool = Field(False, description="hold at each tick (control period) until a command or step")
     start_paused: bool = Field(False, description="hold at t0 until resumed or stepped")
     hold_timeout: float = Field(0.0, ge=0, description="wall s without any request while held before the run "

@@ -34,6 +34,10 @@ import threading
 import weakref
 from dataclasses import dataclass
 
+from pydantic import Field
+
+from snakesim.framework import Params
+
 LOOPBACK = "127.0.0.1"
 #: highest participant index a loopback (unicast) discovery probes; ~this many processes per domain per host
 MAX_PARTICIPANTS = 32
@@ -173,3 +177,11 @@ class Ros2Participant:
 
     def __exit__(self, *exc):
         self.close()
+
+
+class DdsEndpoint(Params):
+    """Where a ROS 2 component talks: the DDS domain and network interface (one definition for all)."""
+
+    domain_id: int | None = Field(None, ge=0, le=232, description="DDS domain (default: ROS_DOMAIN_ID, else 0)")
+    interface: str = Field(LOOPBACK, description="network interface name or address; 127.0.0.1 (default): "
+                                                 "this machine only, no multicast")
