@@ -30,7 +30,7 @@ from .binding import Cell, make_namespace, set_cache
 from .component import Component, StopFlag
 from .errors import BuildError, ConfigError
 from .rates import MAX_PHASES, lcm, period_of, phase_count
-from .resources import provider_order, resolve_uses
+from .resources import ResourceBindingError, provider_order, resolve_uses
 from .signals import Structured
 from .stops import StopCondition, compile_stop
 from .wiring import PortInfo, PortRef, check_compatible, parse_ref, port_infos
@@ -175,9 +175,9 @@ def _instantiate(resolved: Resolved, registry) -> tuple[dict[str, Component], di
             raise ConfigError(str(e), resolved.where.get(name), f"components.{name}.type") from None
     try:
         order, binding = provider_order(classes, {n: s.uses for n, s in resolved.components.items()})
-    except ValueError as e:
-        bad = str(e).split(":", 1)[0].split(" ", 1)[0]
-        raise ConfigError(str(e), resolved.where.get(bad), f"components.{bad}.uses") from None
+    except ResourceBindingError as e:
+        raise ConfigError(str(e), resolved.where.get(e.component),
+                          f"components.{e.component}.uses" if e.component else "components") from None
     built: dict[str, Component] = {}
     for name in order:
         spec, cls, where = resolved.components[name], classes[name], resolved.where.get(name)

@@ -25,6 +25,14 @@ from __future__ import annotations
 from typing import Any
 
 
+class ResourceBindingError(ValueError):
+    """A use that cannot be bound; ``component`` names the component whose entry is at fault."""
+
+    def __init__(self, component: str | None, message: str):
+        super().__init__(message)
+        self.component = component
+
+
 class _ResourceSlot:
     role = "resource"
 
@@ -69,16 +77,17 @@ def provider_order(classes: dict[str, type], explicit: dict[str, dict[str, str]]
     classes:  component name -> component class
     explicit: component name -> {uses slot: provider component name} from the assembly
     Returns (names in instantiation order, {name: {slot: (provider name, provider slot) or None}}).
-    Raises ValueError with the component, slot and the valid choices.
+    Raises ResourceBindingError naming the component, the slot and the valid choices.
     """
     offers = [(n, slot, prov.kind) for n, cls in classes.items() for slot, prov in cls.provides.items()]
     binding: dict[str, dict[str, tuple[str, str] | None]] = {}
     for name, cls in classes.items():
+        kind_name = cls.type_name or cls.__name__
         given = dict(explicit.get(name) or {})
         unknown = [k for k in given if k not in cls.uses]
         if unknown:
-            raise ValueError(f"{name}: 'uses' names '{unknown[0]}', which {cls.type_name or cls.__name__} does not "
-                             f"use; it uses: {', '.join(cls.uses) or 'nothing'}")
+            raise ResourceBindingError(name, f"{name}: 'uses' names '{unknown[0]}', which {kind_name} does not "
+                                             f"use; it uses: {', '.join(cls.uses) or 'nothing'}")
         binding[name] = {}
         for slot, use in cls.uses.items():
             fits = [(n, s) for n, s, kind in offers if n != name and issubclass(kind, use.kind)]
@@ -88,21 +97,21 @@ def provider_order(classes: dict[str, type], explicit: dict[str, dict[str, str]]
                 chosen = [(n, s) for n, s in fits if n == target]
                 if not chosen:
                     valid = ", ".join(n for n, _ in fits) or "none in this scene"
-                    raise ValueError(f"{name}: uses.{slot} = '{target}', which does not provide a {want}; "
-                                     f"components that do: {valid}")
+                    raise ResourceBindingError(name, f"{name}: uses.{slot} = '{target}', which does not provide "
+                                                     f"a {want}; components that do: {valid}")
                 binding[name][slot] = chosen[0]
             elif len(fits) == 1:
                 binding[name][slot] = fits[0]
             elif not fits:
                 if use.required:
-                    raise ValueError(f"{name} ({cls.type_name or cls.__name__}) uses a {want} ('{slot}'), and no "
-                                     f"component in the scene provides one; add the component that builds it "
-                                     f"(e.g. the robot's multibody)")
+                    raise ResourceBindingError(name, f"{name} ({kind_name}) uses a {want} ('{slot}'), and no "
+                                                     f"component in the scene provides one; add the component "
+                                                     f"that builds it (e.g. the robot's multibody)")
                 binding[name][slot] = None
             else:
-                raise ValueError(f"{name} ({cls.type_name or cls.__name__}) uses a {want} ('{slot}') and "
-                                 f"{len(fits)} components provide one ({', '.join(n for n, _ in fits)}); "
-                                 f"name one with 'uses: {{{slot}: NAME}}'")
+                raise ResourceBindingError(name, f"{name} ({kind_name}) uses a {want} ('{slot}') and {len(fits)} "
+                                                 f"components provide one ({', '.join(n for n, _ in fits)}); "
+                                                 f"name one with 'uses: {{{slot}: NAME}}'")
     order: list[str] = []
     state: dict[str, int] = {}
 
@@ -110,7 +119,7 @@ def provider_order(classes: dict[str, type], explicit: dict[str, dict[str, str]]
         if state.get(n) == 2:
             return
         if state.get(n) == 1:
-            raise ValueError("resources used in a cycle: " + " -> ".join(path + [n]))
+            raise ResourceBindingError(None, "resources used in a cycle: " + " -> ".join(path + [n]))
         state[n] = 1
         for b in binding[n].values():
             if b is not None:
