@@ -146,7 +146,7 @@ class Multibody(Component[MultibodyParams]):
         p = self.p
         if not np.all(np.isfinite(p.gravity)):
             raise ValueError(f"{self.name}: gravity {p.gravity} must be finite")
-        robot = self.robot = RobotModel.of(RobotSource(**{k: getattr(p, k) for k in RobotSource.model_fields}))
+        robot = self.robot = RobotModel.of(RobotSource.of(p))
         self.mode, self.mode_reason = choose_mode(p.screw_pairs, robot.groups)
         self.armature_user = joint_values.armature(robot, p)
         self.damping_user = joint_values.damping(robot, p)

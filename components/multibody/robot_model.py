@@ -53,6 +53,11 @@ class RobotSource(Params):
     head: bool | None = Field(None, description="head on/off for a design (default: the design's)")
     robot: dict[str, Any] = Field(default_factory=dict, description="generator parameters (hand, lead_angle, ...)")
 
+    @classmethod
+    def of(cls, params) -> "RobotSource":
+        """The robot-source keys of a provider's params (the multibody's, placed_multibody's)."""
+        return cls(**{k: getattr(params, k) for k in cls.model_fields})
+
     def source_key(self) -> str:
         return json.dumps({k: getattr(self, k) for k in RobotSource.model_fields}, sort_keys=True, default=str)
 

@@ -40,7 +40,7 @@ class PlacedMultibody(Multibody):
         p = self.p
         if p.shape is not None:
             # the robot Multibody.setup() builds (RobotModel.of is memoised: the same object)
-            robot = RobotModel.of(RobotSource(**{k: getattr(p, k) for k in RobotSource.model_fields}))
+            robot = RobotModel.of(RobotSource.of(p))
             pl = fit_shape(robot, p.shape, p.limits)
             self.placement = pl
             self.p = p.model_copy(update={"q0": pl.q0, "base_position": pl.base_position,
