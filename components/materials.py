@@ -9,6 +9,15 @@ A :class:`Material` is named and carries
     ev_a   1       ‖e_v‖ at zero normal force   } fig. 6 fit ‖e_v‖ = ev_a + ev_b·F_n;   > 0
     ev_b   1/N     d‖e_v‖/dF_n                  } ev_a = 1, ev_b = 0 is isotropic
 
+and, for the perception sensors (cameras and lidar; contact never reads them),
+
+    albedo 1       diffuse (Lambertian) reflectance at the lidar's wavelength and for a grey
+                   camera image                                                  in [0, 1]
+    color  1       linear RGB diffuse reflectance of a colour camera image       each in [0, 1]
+    texture        procedural albedo pattern: none, or checker (cubes of texture_size m
+                   in the world alternate between albedo and albedo·(1 − texture_contrast);
+                   perception/textures.py)
+
 Where materials come from:
 
 - a terrain lists them (terrain YAML ``materials:``, first = default of every region);
@@ -34,7 +43,7 @@ from __future__ import annotations
 import difflib
 import math
 from pathlib import Path
-from typing import Optional
+from typing import Literal, Optional
 
 import numpy as np
 from pydantic import Field, ValidationError, ValidationInfo, create_model, field_validator
@@ -75,6 +84,30 @@ class Material(Params):
     mu: float = Field(0.3, description="friction coefficient (eqs. 1, 6), ≥ 0")
     ev_a: float = Field(1.0, description="‖e_v‖ at zero normal force, > 0 (fig. 6 fit)")
     ev_b: float = Field(0.0, description="1/N, d‖e_v‖/dF_n (fig. 6 fit)")
+    albedo: float = Field(0.6, description="diffuse reflectance seen by lidar and grey cameras, in [0, 1]")
+    color: tuple[float, float, float] = Field((0.80, 0.90, 0.97),
+                                              description="linear RGB diffuse reflectance for colour cameras, "
+                                                          "each in [0, 1]")
+
+    texture: Literal["none", "checker"] = Field("none", description="procedural albedo pattern for sensors")
+    texture_size: float = Field(0.1, gt=0, description="m, checker square size")
+    texture_contrast: float = Field(0.5, ge=0, le=1, description="dark squares reflect albedo·(1 − contrast)")
+
+    @field_validator("albedo")
+    @classmethod
+    def _check_albedo(cls, v: float, info: ValidationInfo) -> float:
+        if not (math.isfinite(v) and 0.0 <= v <= 1.0):
+            raise ValueError(f"material '{info.data.get('name', '?')}': albedo = {v} must be in [0, 1] "
+                             "(diffuse reflectance)")
+        return v
+
+    @field_validator("color")
+    @classmethod
+    def _check_color(cls, v, info: ValidationInfo):
+        if not all(math.isfinite(c) and 0.0 <= c <= 1.0 for c in v):
+            raise ValueError(f"material '{info.data.get('name', '?')}': color = {list(v)} must be three "
+                             "values in [0, 1] (linear RGB reflectance)")
+        return v
 
     @field_validator(*COLUMNS)
     @classmethod
@@ -112,7 +145,7 @@ class _PatchBase(Params):
         return Material(**{**material.model_dump(), **given}) if given else material
 
 
-#: Material's optional view (every field but ``name``, default None = keep the material's
+#: Material's optional view of its contact fields (COLUMNS; default None = keep the material's
 #: value): a contact component's ``material`` parameter. Generated from Material, so the
 #: two cannot drift apart.
 MaterialPatch = create_model(

@@ -18,6 +18,8 @@ from .monitors import MobilityMonitor
 from .monitors.planar_pose import PlanarPose
 from .control.screw_schedule import ScrewSchedule
 from .multibody import Multibody
+from .perception import PERCEPTION
+from .perception.cli import perception_run_options  # noqa: F401  (hookimpl: --lidar, --stereo)
 from .placement import PLACEMENT
 from .terrain import TerrainSource
 from .signals.blocks import Gain, Sum, ZeroOrderHold
@@ -25,7 +27,7 @@ from .signals.sources import Constant, Sine, Step
 from .sensors import ForceTorqueSensors, Imu
 from .tethers import Tethers, WrenchSum
 from .viz import RerunSink
-from .ros2 import Ros2Commands, Ros2Publisher, Ros2SimControl
+from .ros2 import Ros2Commands, Ros2Publisher, Ros2SimControl, Ros2TetherCommands
 from .ros2.cli import ros2_run_options  # noqa: F401  (hookimpl: --ros2)
 from .ros2.mcap_cli import ros2_mcap_run_options  # noqa: F401  (hookimpl: --ros2-mcap)
 from .ros2.mcap_recorder import Ros2McapRecorder
@@ -35,8 +37,8 @@ BUILTIN = (Constant, Step, Sine, Gain, Sum, ZeroOrderHold, Pendulum, ViscousDamp
            PointContact, HullContact, TerrainSource, Multibody, ScrewSdfContact, ScrewDrive,
            JointPid, JointSpringDamper, JointSetpoints, SerpenoidGait, CsvTrajectory, Schedule, ForceTorqueSensors,
            Imu, Tethers, WrenchSum, MobilityMonitor, RerunSink, PlanarPose, ScrewSchedule, Ros2Publisher, Ros2Commands,
-           Ros2SimControl, Ros2McapRecorder,
-           *PLACEMENT)
+           Ros2SimControl, Ros2McapRecorder, Ros2TetherCommands,
+           *PLACEMENT, *PERCEPTION)
 
 
 @hookimpl

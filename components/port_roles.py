@@ -24,3 +24,7 @@ SENSOR_WRENCHES = "sensor_wrenches"
 IMU_ANGULAR_RATE = "imu_angular_rate"
 IMU_SPECIFIC_FORCE = "imu_specific_force"
 IMU_ORIENTATION = "imu_orientation"
+#: LidarScan (components/perception/lidar.py): one lidar sample, points in the lidar frame
+LIDAR_SCAN = "lidar_scan"
+#: CameraFrame (components/perception/camera.py): one camera image with depth, optical frame
+CAMERA_FRAME = "camera_frame"

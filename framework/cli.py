@@ -44,9 +44,10 @@ def _session(assembly, config, sets, extras=None, **sim):
         assembly = reg.default_assembly()
     resolved = resolve(assembly, search_path=reg.assembly_paths(), config_files=config, overrides=sets,
                        sim_overrides=sim)
-    for name, value in extras.items():
-        if name in _RUN_OPTIONS:
-            _RUN_OPTIONS[name](resolved, value)
+    # options that add components first, then those that add sinks (which wire what they find)
+    chosen = [(_RUN_OPTIONS[n], v) for n, v in extras.items() if n in _RUN_OPTIONS]
+    for apply, value in sorted(chosen, key=lambda c: bool(getattr(c[0], "adds_sink", False))):
+        apply(resolved, value)
     return Session(resolved, reg)
 
 

@@ -41,5 +41,8 @@ def snakesim_run_options():
     """Return ``(click.Option, apply)`` pairs for ``run``/``check``.
 
     ``apply(resolved, value)`` edits the resolved configuration before it is
-    built when the option is given (e.g. ``--viz`` adds a viewer sink).
+    built when the option is given (e.g. ``--viz`` adds a viewer sink). An
+    ``apply`` with the attribute ``adds_sink = True`` runs after every other
+    given option, so a sink wires the components the others added (``--viz``
+    shows the sensors ``--lidar`` adds).
     """

@@ -1,6 +1,6 @@
 """YAML terrain definitions: pydantic schema (``kind:`` discriminator) and :func:`load_terrain`.
 
-    kind: u_channel            # plane | dem | tube | parallel_walls | u_channel | moulin | mesh
+    kind: u_channel            # plane | dem | tube | parallel_walls | u_channel | moulin | obstacles | mesh
     width: 0.4
     materials:                 # first one is the default of every region
       - {name: ice, k: 2.0e5, c: 500, mu: 0.1}
@@ -12,6 +12,15 @@ Materials are snakesim.components.materials.Material (k N/m, c N·s/m, mu, ev_a,
 A materials file (what ``snakesim fit-friction --out`` writes) has one key, ``materials:``,
 a list in the same form; ``{include: FILE}`` puts its materials where the entry stands.
 
+An obstacle field (flat ground with blocks and rocks, regions ground | blocks | rocks):
+
+    kind: obstacles
+    ground_height: 0.0
+    boxes:   [{center: [2, 0.8, 0.15], size: [0.4, 0.3, 0.3], yaw: 0.3}]     # full edges; roll, pitch too
+    spheres: [{center: [3, -0.9, -0.05], radius: 0.2}]                       # centre below ground: a boulder
+    random:  {count: 20, seed: 1, area: [1, 8, -2, 2], size: [0.2, 0.5], kinds: [box, sphere],
+              keep_clear: {center: [0, 0], radius: 1.0}}                     # + burial, min_gap
+
 Files named in a definition (DEM grids, meshes, material files) are relative to the YAML file.
 """
 
@@ -20,7 +29,7 @@ from __future__ import annotations
 import difflib
 from importlib.resources import files
 from pathlib import Path
-from typing import Annotated, Literal, Union
+from typing import Annotated, Literal, Union, get_args
 
 from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError, model_validator
 
@@ -28,7 +37,7 @@ from snakesim.components.materials import Material, material_from_mapping, read_
 from snakesim.framework import ConfigError
 from snakesim.framework.yaml_source import load_yaml
 
-from . import analytic, dem, mesh
+from . import analytic, dem, mesh, obstacles
 from .base import Terrain
 
 Vec3 = tuple[float, float, float]
@@ -151,12 +160,80 @@ class MeshSpec(_Base):
     open_surface: bool = False
 
 
-TerrainSpec = Annotated[Union[PlaneSpec, TubeSpec, WallsSpec, UChannelSpec, MoulinSpec, DemSpec, MeshSpec],
-                        Field(discriminator="kind")]
+class _FiniteModel(_Model):
+    model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
+
+
+Positive = Annotated[float, Field(gt=0)]
+
+
+class BoxSpec(_FiniteModel):
+    """A block: an oriented box (see obstacles.py)."""
+
+    center: Vec3 = Field(description="m")
+    size: tuple[Positive, Positive, Positive] = Field(description="full edge lengths along the box's x, y, z, m")
+    yaw: float = Field(0.0, description="rad, about z")
+    roll: float = Field(0.0, description="rad, about x (fixed axes, applied first)")
+    pitch: float = Field(0.0, description="rad, about y")
+
+
+class SphereSpec(_FiniteModel):
+    """A rock: a sphere; a centre below the ground makes a half-buried boulder."""
+
+    center: Vec3 = Field(description="m")
+    radius: float = Field(gt=0, description="m")
+
+
+class KeepClearSpec(_FiniteModel):
+    center: tuple[float, float] = Field(description="x, y of the robot's start, m")
+    radius: float = Field(ge=0, description="m; no obstacle's footprint reaches into this disc")
+
+
+class RandomObstaclesSpec(_FiniteModel):
+    """Seeded random blocks and rocks (obstacles.scatter_obstacles), added to the listed ones."""
+
+    count: int = Field(ge=0)
+    seed: int = 0
+    area: tuple[float, float, float, float] = Field(description="xmin, xmax, ymin, ymax of the centres, m")
+    size: tuple[Positive, Positive] = Field(description="min, max of a block's edges and a rock's diameter, m")
+    kinds: list[Literal["box", "sphere"]] = Field(default_factory=lambda: ["box", "sphere"], min_length=1)
+    keep_clear: KeepClearSpec | None = None
+    burial: tuple[float, float] = Field((0.0, 0.5), description="min, max depth of a rock's centre below the "
+                                                                 "ground, in radii, each in [0, 1)")
+    min_gap: float = Field(0.0, ge=0, description="m between footprints")
+
+    @model_validator(mode="after")
+    def _ranges(self):
+        xmin, xmax, ymin, ymax = self.area
+        if not (xmin < xmax and ymin < ymax):
+            raise ValueError(f"area = {list(self.area)} m: need [xmin, xmax, ymin, ymax] with xmin < xmax "
+                             f"and ymin < ymax")
+        if self.size[0] > self.size[1]:
+            raise ValueError(f"size = {list(self.size)} m: need [min, max] with 0 < min <= max")
+        if not 0 <= self.burial[0] <= self.burial[1] < 1:
+            raise ValueError(f"burial = {list(self.burial)}: need [min, max] with 0 <= min <= max < 1 "
+                             f"(depth of a rock's centre below the ground, in radii)")
+        return self
+
+
+class ObstaclesSpec(_Base):
+    model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
+
+    kind: Literal["obstacles"]
+    ground_height: float = Field(0.0, description="z of the flat ground, m")
+    boxes: list[BoxSpec] = Field(default_factory=list)
+    spheres: list[SphereSpec] = Field(default_factory=list)
+    random: RandomObstaclesSpec | None = None
+
+
+_SPECS = (PlaneSpec, TubeSpec, WallsSpec, UChannelSpec, MoulinSpec, DemSpec, ObstaclesSpec, MeshSpec)
+TerrainSpec = Annotated[Union[_SPECS], Field(discriminator="kind")]
 _ADAPTER = TypeAdapter(TerrainSpec)
+_SPEC_OF_KIND = {c.model_fields["kind"].annotation.__args__[0]: c for c in _SPECS}
 _CLASSES = {"plane": analytic.PlaneTerrain, "tube": analytic.FourierCylinder,
             "parallel_walls": analytic.ParallelWalls, "u_channel": analytic.UChannel,
-            "moulin": analytic.Moulin, "dem": dem.HeightField, "mesh": mesh.SdfGrid}
+            "moulin": analytic.Moulin, "dem": dem.HeightField, "obstacles": obstacles.ObstacleField,
+            "mesh": mesh.SdfGrid}
 
 
 # -- validation ------------------------------------------------------------------
@@ -179,9 +256,43 @@ def _message(err: dict) -> str:
     msg = err["msg"]
     if err["type"] == "value_error":
         return msg.removeprefix("Value error, ")
-    if "input" in err and not isinstance(err["input"], (dict, list)):
-        return f"{msg} (got {err['input']!r})"
+    if "input" in err and not isinstance(err["input"], dict):
+        got = repr(err["input"])
+        return f"{msg} (got {got if len(got) <= 80 else got[:77] + '...'})"
     return msg
+
+
+def _short_tuple(err: dict, loc: list, model) -> tuple[list, str] | None:
+    """A list with too few values is reported by pydantic as its first missing item: say so."""
+    if err["type"] != "missing" or not loc or not isinstance(loc[-1], int) or not isinstance(err.get("input"), list):
+        return None
+    holder = _model_at(model, loc[:-1])
+    field = holder.model_fields.get(loc[-2]) if holder is not None and isinstance(loc[-2], str) else None
+    want = f"{len(get_args(field.annotation))} values" if field is not None else f"more than {len(err['input'])} values"
+    return loc[:-1], f"needs {want}, got {len(err['input'])}: {err['input']!r}"
+
+
+def _model_at(model, loc):
+    """The schema model that holds the key at the end of ``loc`` (None if the path leaves the schema)."""
+    for part in loc[:-1]:
+        if isinstance(part, int):
+            continue                                   # a list entry: same item model
+        field = model.model_fields.get(part) if model is not None else None
+        if field is None:
+            return None
+        model = _model_in(field.annotation)
+    return model
+
+
+def _model_in(annotation):
+    """The BaseModel class inside an annotation such as ``X``, ``list[X]`` or ``X | None``."""
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return annotation
+    for arg in get_args(annotation):
+        found = _model_in(arg)
+        if found is not None:
+            return found
+    return None
 
 
 def _unknown_key(key, valid) -> str:
@@ -203,11 +314,13 @@ def validate_spec(data, source: str = "<terrain>", base_dir: Path | None = None)
         err = next((x for x in errs if x["type"] == "extra_forbidden"), errs[0])   # a typo explains 'missing'
         loc = [x for x in err["loc"] if not (isinstance(x, str) and x == data.get("kind"))]
         msg = _message(err)
+        short = _short_tuple(err, loc, _SPEC_OF_KIND.get(data.get("kind")))
+        if short is not None:
+            loc, msg = short
         if err["type"] == "extra_forbidden":
-            model = {c.model_fields["kind"].annotation.__args__[0]: c for c in
-                     (PlaneSpec, TubeSpec, WallsSpec, UChannelSpec, MoulinSpec, DemSpec, MeshSpec)}.get(data.get("kind"))
+            model = _model_at(_SPEC_OF_KIND.get(data.get("kind")), loc)
             msg = f"unknown key '{loc[-1]}'"
-            if model is not None and len(loc) == 1:
+            if model is not None:
                 msg = _unknown_key(loc[-1], model.model_fields)
         raise ConfigError(msg, _where(data_in, loc) or source, ".".join(str(x) for x in loc) or None) from None
 
@@ -281,10 +394,31 @@ def build_terrain(spec, base_dir: Path = Path("."), source: str = "<terrain>", n
             return analytic.Moulin(shaft, spec.surface, **kw)
     except ValueError as e:
         raise ConfigError(str(e), source) from None
+    if spec.kind == "obstacles":
+        return _build_obstacles(spec, source, kw)
     if spec.kind == "dem":
         return _build_dem(spec, base_dir, source, kw)
     return mesh.mesh_terrain(base_dir / spec.file, spec.cells, spec.resolution, spec.padding, spec.inside,
                              spec.open_surface, store=store, **kw)
+
+
+def _build_obstacles(spec: ObstaclesSpec, source: str, kw) -> Terrain:
+    blocks = [obstacles.Block(b.center, b.size, b.yaw, b.roll, b.pitch) for b in spec.boxes]
+    rocks = [obstacles.Rock(s.center, s.radius) for s in spec.spheres]
+    r = spec.random
+    if r is not None:
+        clear = None if r.keep_clear is None else (r.keep_clear.center, r.keep_clear.radius)
+        try:
+            more_blocks, more_rocks = obstacles.scatter_obstacles(
+                r.count, r.seed, r.area, r.size, tuple(r.kinds), clear, r.burial, r.min_gap, spec.ground_height,
+                occupied=blocks + rocks)
+        except ValueError as e:
+            raise ConfigError(str(e), source, "random.count") from None
+        blocks, rocks = blocks + more_blocks, rocks + more_rocks
+    try:
+        return obstacles.ObstacleField(spec.ground_height, blocks, rocks, **kw)
+    except ValueError as e:
+        raise ConfigError(str(e), source) from None
 
 
 def _build_dem(spec: DemSpec, base_dir: Path, source: str, kw) -> Terrain:

@@ -12,6 +12,11 @@ Components are found by what their classes declare, never by their names or port
     attraction the first structured output of type AttractionSet (placement_settle's springs)
     tethers    a ``tethers`` component (class Tethers): its ropes (params ``tethers``: link,
                offset, anchor) drawn as straight lines from the link poses
+    sensors    every output of role LIDAR_SCAN or CAMERA_FRAME (a lidar's scan, a camera's frame,
+               a stereo pair's left and right, an image filter's frame), one sensor input each:
+               drawn under world/sensors/<comp>/<port>. Wiring a sensor to the viewer keeps it
+               running (the viewer is a sink), so --viz costs its ray casting even when nothing
+               else reads it
     series     every recorded signal ('comp.port'), one plot each
 
 The types are imported from their packages' public modules (STRUCTURED below).
@@ -29,11 +34,13 @@ from snakesim.framework.assembly import ComponentSpec, Resolved
 from snakesim.framework.rates import MAX_PHASES, lcm, nearest_period
 from snakesim.framework.signals import Structured
 
-from snakesim.components.port_roles import LINK_POSES
+from snakesim.components.port_roles import CAMERA_FRAME, LIDAR_SCAN, LINK_POSES
 
 from .target import VizTarget
 
 VIEWER_RATE_HZ = 30.0
+#: output roles drawn as sensor data (components/port_roles.py)
+SENSOR_ROLES = (LIDAR_SCAN, CAMERA_FRAME)
 
 
 @dataclasses.dataclass
@@ -45,6 +52,7 @@ class Attached:
     attraction: str | None = None
     tethers: str | None = None
     series: list[str] = dataclasses.field(default_factory=list)
+    sensors: list[str] = dataclasses.field(default_factory=list)
     rate: float = VIEWER_RATE_HZ
 
 
@@ -118,6 +126,10 @@ def attach_viewer(resolved: Resolved, target: VizTarget, registry=None, name: st
             if poses:
                 conns.append((f"{comp}.{poses[0]}", f"{name}.link_poses"))
         for port, out in cls.outputs.items():
+            if out.role in SENSOR_ROLES:
+                found.sensors.append(f"{comp}.{port}")
+                conns.append((f"{comp}.{port}", f"{name}.sensor{len(found.sensors) - 1}"))
+                continue
             sig = out.signal
             if not (isinstance(sig, Structured) and isinstance(sig.cls, type)):
                 continue
@@ -135,6 +147,7 @@ def attach_viewer(resolved: Resolved, target: VizTarget, registry=None, name: st
         found.series.append(ref)
         conns.append((ref, f"{name}.s{i}"))
     sink["series"] = list(found.series)
+    sink["sensors"] = list(found.sensors)
     sim = resolved.sim
     sink["t_end"] = sim.t0 + sim.duration
     sink.update(params or {})

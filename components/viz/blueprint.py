@@ -1,4 +1,5 @@
-"""The viewer's default layout: the 3-D world beside the recorded signals' plots."""
+"""The viewer's default layout: the 3-D world beside the recorded signals' plots, the cameras' images
+under the world."""
 
 from __future__ import annotations
 
@@ -17,7 +18,9 @@ def eye(positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return target + d * direction / np.linalg.norm(direction), target
 
 
-def default_blueprint(positions, series_paths):
+def default_blueprint(positions, series_paths, camera_paths=()):
+    """The 3-D world (robot, terrain, sensor points and camera frusta) beside the plots; with cameras
+    (their pinhole entities), a row of 2-D views, one per camera (image and depth), under the world."""
     import rerun.blueprint as rrb
 
     position, target = eye(positions)
@@ -26,4 +29,13 @@ def default_blueprint(positions, series_paths):
                                                              eye_up=[0.0, 0.0, 1.0]))
     plots = [rrb.TimeSeriesView(origin=p, name=p[len(E.PLOTS) + 1:]) for p in series_paths]
     plots.append(rrb.TimeSeriesView(origin=E.REAL_TIME_FACTOR, name="real-time factor"))
-    return rrb.Blueprint(rrb.Horizontal(world, rrb.Tabs(*plots), column_shares=[3, 2]), collapse_panels=True)
+    left = world
+    if camera_paths:
+        cameras = [rrb.Spatial2DView(origin=p, name=_camera_name(p)) for p in camera_paths]
+        left = rrb.Vertical(world, rrb.Horizontal(*cameras), row_shares=[2, 1])
+    return rrb.Blueprint(rrb.Horizontal(left, rrb.Tabs(*plots), column_shares=[3, 2]), collapse_panels=True)
+
+
+def _camera_name(pinhole_path: str) -> str:
+    """'world/sensors/stereo/left/pinhole' -> 'stereo/left'."""
+    return pinhole_path[len(E.SENSORS) + 1:].rsplit("/", 1)[0]

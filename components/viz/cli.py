@@ -58,6 +58,9 @@ def _apply(resolved, target: VizTarget) -> None:
     attach_viewer(resolved, target)
 
 
+_apply.adds_sink = True        # after options that add components: it shows what they add
+
+
 @hookimpl(specname="snakesim_run_options")
 def viz_run_options():
     return [(TargetOption(["--viz"], type=TargetType(), default=None, help=VIZ_HELP), _apply)]

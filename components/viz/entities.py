@@ -14,6 +14,14 @@ duration in seconds from the run's t0)::
     world/debug/attraction                     Arrows3D               placement attraction springs (paper
                                                                       fig. 9, yellow), scaled; empty once latched
     world/debug/frames/<link>                  Transform3D + Arrows3D body frame axes (on request)
+    world/sensors/<component>/<port>           Transform3D per sample the sensor frame (lidar frame, camera
+                                                                      optical frame), world, at the sample time
+    world/sensors/<component>/<port>/points    Points3D per sample    lidar returns, sensor frame, coloured by
+                                                                      intensity (no-returns left out)
+    world/sensors/<component>/<port>/pinhole   Pinhole, static        camera resolution and K, optical frame
+                                                                      (RDF: x right, y down, z forward)
+    world/sensors/<component>/<port>/pinhole/image  Image per sample  the camera image, 8-bit grey or RGB
+    world/sensors/<component>/<port>/pinhole/depth  DepthImage        depth (z in the optical frame), m
     plots/<component>/<port>                   Scalars                a recorded signal, one series per element
     plots/sim/real_time_factor                 Scalars                simulated s per wall-clock s
 
@@ -21,13 +29,21 @@ Physical vs ornamental (paper 2.2.3). Everything under ``world/physical``
 is an object a sensor could see: terrain, robot bodies, tethers. Everything
 under ``world/debug`` is ornamental: arrows, frames, labels and markers that
 explain the simulation. The viewer shows both; a sensor never sees debug
-geometry. Contract for perception sensors (cameras, lidar; none exist yet):
-a sensor builds its scene from the physical objects only -- the same
-terrain, link meshes and tethers this package logs under ``world/physical``
-(use :func:`is_physical` when a sensor or exporter walks entity paths) --
-and must never ray-cast against, render or return anything under
-``world/debug``. New ornamental geometry goes under ``world/debug``; new
+geometry. Contract for the perception sensors (``components/perception``:
+lidar, cameras): a sensor builds its scene from the physical objects only --
+the terrain and the link meshes this package logs under ``world/physical``
+(``perception/surfaces.py`` builds them from the same terrain mesh and
+``robot_geometry.link_meshes``; tethers are left out there on purpose) --
+and never ray-casts against, renders or returns anything under
+``world/debug``; use :func:`is_physical` when a sensor or exporter walks
+entity paths. New ornamental geometry goes under ``world/debug``; new
 geometry with mass or optical presence goes under ``world/physical``.
+
+Sensor data (``world/sensors``) is neither: it is what the sensors measured,
+drawn where they measured it. It is not physical (a sensor must never see
+another sensor's points or images: :func:`is_physical` is False for it) and
+not ornamental (it is measurement, not an explanation of the simulation).
+Each sample is logged once, at its own sample time (:mod:`.sensor_log`).
 """
 
 from __future__ import annotations
@@ -37,6 +53,7 @@ import re
 WORLD = "world"
 PHYSICAL = f"{WORLD}/physical"
 DEBUG = f"{WORLD}/debug"
+SENSORS = f"{WORLD}/sensors"
 PLOTS = "plots"
 TIMELINE = "sim"
 
@@ -70,6 +87,20 @@ def frame_path(link: str) -> str:
     return f"{FRAMES}/{part(link).replace('/', '_')}"
 
 
+def sensor_path(output: str) -> str:
+    """'lidar.scan' -> 'world/sensors/lidar/scan': the sensor frame's entity (a component name may
+    contain '/'); its data lies under it (:data:`SENSOR_POINTS`, :data:`SENSOR_PINHOLE`, ...)."""
+    comp, _, port = output.rpartition(".")
+    return f"{SENSORS}/{part(comp)}/{part(port)}"
+
+
+# under sensor_path(output): the lidar's points, the camera's pinhole and the images it projects
+SENSOR_POINTS = "points"
+SENSOR_PINHOLE = "pinhole"
+SENSOR_IMAGE = f"{SENSOR_PINHOLE}/image"
+SENSOR_DEPTH = f"{SENSOR_PINHOLE}/depth"
+
+
 def series_path(signal: str) -> str:
     """'robot.joint_q' -> 'plots/robot/joint_q' (a component name may contain '/')."""
     comp, _, port = signal.rpartition(".")
@@ -78,6 +109,7 @@ def series_path(signal: str) -> str:
 
 def is_physical(entity_path: str) -> bool:
     """True for what a sensor may see (``world/physical/...``), False for
-    ornamental geometry (``world/debug/...``), plots and anything else."""
+    ornamental geometry (``world/debug/...``), sensor data (``world/sensors/...``),
+    plots and anything else."""
     p = entity_path.lstrip("/")
     return p == PHYSICAL or p.startswith(PHYSICAL + "/")

@@ -1,5 +1,5 @@
-"""Rerun viewer sink: the robot, terrain, contacts, tethers, placement attraction and recorded signals,
-live or to an .rrd.
+"""Rerun viewer sink: the robot, terrain, contacts, tethers, placement attraction, what the sensors
+measure and recorded signals, live or to an .rrd.
 
 A sink (``is_sink``): it keeps its upstream alive, has no outputs and runs
 as a discrete component at the viewer rate (its ``rate``; without one it
@@ -24,6 +24,11 @@ in   link_poses[nl, 7]  m, 1  [x, y, z, qx, qy, qz, qw] per link, world (the mul
                         each tie point (link pose · offset) to its anchor
      s0 .. s{k-1}       one numeric input of any shape per entry of params.series (the signal
                         it plots, 'comp.port'); made per instance from the params
+     sensor0 .. sensor{m-1}
+                        one structured input per entry of params.sensors (the sensor output it
+                        draws, 'comp.port'): a LidarScan (points coloured by intensity) or a
+                        CameraFrame (pinhole, image, depth), drawn under world/sensors/<comp>/<port>
+                        at each sample's own time (:mod:`.sensor_log`); made per instance
 out  none
 
 First frame: opens the recording (:func:`.target.open_recording`: headless
@@ -31,11 +36,13 @@ machines never spawn a window), logs the static meshes. Every frame: link
 transforms, series values, the real-time factor, contacts, attraction arrows
 and tethers are queued and sent in ``send_columns`` batches
 (:class:`.scene_log.SceneLog`) of 1 s of frames to a live viewer, 2 s to a
-file (``flush_frames``). Everything is sent and the file closed at ``t_end``,
-on the session's ``close()`` (``plan.caches[name].close()``), or at interpreter
-exit. A later run of the same build (time going back) starts a new recording.
-The recording and its clock are the build's (``make_cache``), not the component's. Entity layout and the physical /
-ornamental contract: :mod:`.entities`.
+file (``flush_frames``); a sensor sample not yet drawn is logged at once, at
+its sample time (:class:`.sensor_log.SensorLog`). Everything is sent and the
+file closed at the last frame before ``t_end``, on the session's ``close()``
+(``plan.caches[name].close()``), or at interpreter exit. A later run of the
+same build (time going back) starts a new recording. The recording and its
+clock are the build's (``make_cache``), not the component's. Entity layout and
+the physical / ornamental contract: :mod:`.entities`.
 """
 
 from __future__ import annotations
@@ -80,11 +87,24 @@ class RerunSinkParams(Params):
     frame_length: float = Field(0.1, gt=0, description="m, body frame axis length")
     force_scale: float = Field(0.002, gt=0, description="m of arrow per N of contact or attraction force")
     series: list[str] = Field(default_factory=list, description="'comp.port' plotted from inputs s0, s1, ...")
+    sensors: list[str] = Field(default_factory=list, description="'comp.port' of lidar scans and camera frames "
+                                                                 "drawn from inputs sensor0, sensor1, ...")
+    point_radius: float = Field(0.01, gt=0, description="m, radius of a drawn lidar point")
+    intensity_range: tuple[float, float] = Field((0.0, 1.0), description="lidar intensities spread over the "
+                                                                          "colormap (saturated outside)")
+    frustum_depth: float = Field(0.3, gt=0, description="m, length of a camera's drawn frustum")
     tether_lines: list[dict] = Field(default_factory=list,
                                      description="[{link, offset, anchor}]: straight ropes drawn from link_poses")
     flush_frames: int | None = Field(None, ge=1, description="frames per send_columns batch; default "
                                      "1 s of frames live (spawn, serve), 2 s when saving")
     t_end: float | None = Field(None, description="s: send everything and close at this time")
+
+    @field_validator("intensity_range")
+    @classmethod
+    def _intensity_range(cls, v):
+        if not v[0] < v[1]:
+            raise ValueError(f"intensity_range = {list(v)}: the low end must be below the high end")
+        return v
 
     @field_validator("target")
     @classmethod
@@ -106,6 +126,10 @@ def robot_visuals(robot: RobotModel) -> dict:
 
 def series_input_name(i: int) -> str:
     return f"s{i}"
+
+
+def sensor_input_name(i: int) -> str:
+    return f"sensor{i}"
 
 
 class RerunSink(Component[RerunSinkParams]):
@@ -132,6 +156,11 @@ class RerunSink(Component[RerunSinkParams]):
         for i, _ in enumerate(p.series):
             port = Input(shape=None, unit=None, default=np.zeros(0))
             port.name = series_input_name(i)
+            extra[port.name] = port
+        # sensor inputs too: one structured input per sensor output drawn (LidarScan or CameraFrame)
+        for i, ref in enumerate(p.sensors):
+            port = Input(type=object, doc=f"{ref}: a LidarScan or a CameraFrame")
+            port.name = sensor_input_name(i)
             extra[port.name] = port
         self.inputs = {**type(self).inputs, **extra}
         self._period = 1.0 / (self.rate or p.viewer_rate)
@@ -166,7 +195,11 @@ class RerunSink(Component[RerunSinkParams]):
         tethers = u.tethers if v.has_tethers else (v.ropes.segments(v.poses) if v.ropes is not None else None)
         v.log.add_frame(t, v.poses, v.series, rtf, contacts=u.contacts if v.has_contacts else None,
                         tethers=tethers, attraction=u.attraction if v.has_attraction else None)
-        if self.p.t_end is not None and t >= self.p.t_end - 0.5 * self._period:
+        if v.sensors is not None:
+            v.sensors.add([getattr(u, name) for name in v.sensor_inputs])
+        # the last frame is the one whose successor would fall at or after t_end (the loop makes no
+        # update at t_end itself): close here, whatever the run's length modulo the frame period
+        if self.p.t_end is not None and t + self._period > self.p.t_end - 1e-9 * self._period:
             v.close()
 
     # -- opening ----------------------------------------------------------------------------
@@ -188,7 +221,9 @@ class RerunSink(Component[RerunSinkParams]):
         if terrain is not None:
             tmesh = terrain_mesh(terrain, center, p.terrain_extent, p.terrain_cell, p.terrain_cutaway)
         series = [(s, None, int(np.size(a))) for s, a in zip(p.series, v.series)]
-        bp = default_blueprint(pos, [E.series_path(s) for s in p.series])
+        v.sensor_inputs = [sensor_input_name(i) for i in range(len(p.sensors))]
+        bp = default_blueprint(pos, [E.series_path(s) for s in p.series],
+                               _camera_pinholes(p.sensors, [getattr(u, n) for n in v.sensor_inputs]))
         rec, v.used_target = open_recording(self.target, p.application_id, p.recording_id, blueprint=bp)
         from .scene_log import SceneLog
 
@@ -198,6 +233,11 @@ class RerunSink(Component[RerunSinkParams]):
                          flush_frames=self._flush_frames(v.used_target), contacts=v.has_contacts,
                          attraction=v.has_attraction, tethers=v.has_tethers or v.ropes is not None)
         v.log.log_static(tmesh)
+        if p.sensors:
+            from .sensor_log import SensorLog
+
+            v.sensors = SensorLog(rec, p.sensors, point_radius=p.point_radius, intensity_range=p.intensity_range,
+                                  frustum_depth=p.frustum_depth)
         v.finalizer = weakref.finalize(v, _finish, v.log, rec, v.used_target.mode)
         v.last_wall = time.perf_counter()
 
@@ -220,12 +260,13 @@ class _Viewing:
         self.last_wall = 0.0
         self.poses, self.series, self.ropes = None, [], None
         self.has_contacts = self.has_tethers = self.has_attraction = False
+        self.sensors, self.sensor_inputs = None, []
 
     def close(self) -> None:
         """Send what is queued and close the recording (idempotent)."""
         if self.finalizer is not None:
             self.finalizer()
-        self.finalizer, self.log = None, None
+        self.finalizer, self.log, self.sensors = None, None, None
 
 
 class _Ropes:
@@ -253,6 +294,14 @@ def _ropes(lines, links) -> _Ropes | None:
     return _Ropes(np.array([row[d["link"]] for d in lines]),
                   np.array([d.get("offset", (0.0, 0.0, 0.0)) for d in lines], dtype=float),
                   np.array([d["anchor"] for d in lines], dtype=float))
+
+
+def _camera_pinholes(refs, values) -> list[str]:
+    """Pinhole entities of the sensor outputs whose first value is a camera frame (a 2-D view each)."""
+    from snakesim.components.perception import CameraFrame
+
+    return [f"{E.sensor_path(ref)}/{E.SENSOR_PINHOLE}" for ref, value in zip(refs, values)
+            if isinstance(value, CameraFrame)]
 
 
 def _finish(log, rec, mode: str) -> None:

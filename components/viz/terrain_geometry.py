@@ -11,12 +11,22 @@ model queries (so what you see is the surface the robot touches):
     tube            the wall r_s(θ, s), roughness included, 2·extent long around the centre
     moulin          the shaft wall r_s(θ, s) from the surface down 2·extent, and the
                     surface square with the shaft's mouth cut out
+    obstacles       the ground square (2·extent around the centre) with each obstacle's
+                    footprint cut out exactly, every block (flat faces, clipped at the ground)
+                    and every rock (a UV sphere above the ground, facets within SPHERE_CHORD
+                    of the sphere); blocks bluish grey, rocks grey-brown. Watertight where
+                    obstacles do not overlap: a rock's rim ring has a vertex wherever a ground
+                    grid line crosses it, so ground and rock share their seam and every vertex
+                    lies on the surface (where two footprints share a ground cell, the cut of
+                    one may put ice vertices inside the other rock's rim by < SPHERE_CHORD/2;
+                    overlapping obstacles draw their hidden faces inside each other)
     mesh (SdfGrid)  the imported mesh file the grid was computed from; without one,
                     the zero level set of the grid as voxel faces
 
 Unbounded kinds are cut to ``extent`` (m) around ``center`` (the robot's
-start). Surfaces are a checkerboard of ``cell``-sized quads so motion reads
-in the viewer. Enclosing kinds (tube, moulin shaft, walls) are cut away on
+start); an obstacle field's obstacles are all drawn, only its ground is cut.
+Surfaces are a checkerboard of ``cell``-sized quads so motion reads in the
+viewer (a rock's tessellation follows SPHERE_CHORD, not ``cell``). Enclosing kinds (tube, moulin shaft, walls) are cut away on
 the side facing ``cutaway`` (a direction from the terrain's axis towards the
 viewer; None keeps everything), so the robot inside stays visible.
 """
@@ -28,12 +38,15 @@ from pathlib import Path
 
 import numpy as np
 
-from snakesim.components.terrain import (FourierCylinder, HeightField, Moulin, ParallelWalls, PlaneTerrain,
-                                         SdfGrid, Terrain, UChannel)
+from snakesim.components.terrain import (Block, FourierCylinder, HeightField, Moulin, ObstacleField, ParallelWalls,
+                                         PlaneTerrain, Rock, SdfGrid, Terrain, UChannel)
 
 ICE = np.array([[214, 232, 244], [186, 212, 232]], dtype=np.uint8)   # checker tones, RGB
 DEM_LOW, DEM_HIGH = np.array([120, 160, 200.0]), np.array([240, 248, 255.0])
 MAX_DEM_SIDE = 256
+BLOCK_TONE = np.array([150, 163, 180], dtype=np.uint8)    # bluish grey
+ROCK_TONE = np.array([140, 124, 106], dtype=np.uint8)     # grey-brown
+SPHERE_CHORD = 1e-3     # m: about the most a rock's facets dip inside its sphere (at their centres)
 _Z = np.array([0.0, 0.0, 1.0])
 
 
@@ -64,10 +77,12 @@ def terrain_mesh(terrain: Terrain, center=(0.0, 0.0, 0.0), extent: float = 4.0, 
         return _moulin(terrain, c, extent, cell, cut)
     if isinstance(terrain, FourierCylinder):
         return _cylinder(terrain, c, extent, cell, cut, s_range=None)
+    if isinstance(terrain, ObstacleField):
+        return _obstacles(terrain, c, extent, cell)
     if isinstance(terrain, SdfGrid):
         return _sdf(terrain)
     raise TypeError(f"no display mesh for terrain kind '{terrain.kind}' ({type(terrain).__name__}); "
-                    "known: plane, dem, parallel_walls, u_channel, tube, moulin, mesh")
+                    "known: plane, dem, parallel_walls, u_channel, tube, moulin, obstacles, mesh")
 
 
 # -- building blocks -------------------------------------------------------------------
@@ -217,6 +232,251 @@ def _moulin(t: Moulin, c, extent, cell, cut) -> TerrainMesh:
         horiz = np.array([cut[0], cut[1], 0.0])
         keep &= mid @ horiz <= 0.0
     return _join(wall, _quads(P, keep))
+
+
+def _obstacles(t: ObstacleField, c, extent, cell) -> TerrainMesh:
+    h = t.ground_height
+    xs = c[0] + _grid(2 * extent / cell) * extent
+    ys = c[1] + _grid(2 * extent / cell) * extent
+    parts, holes = [], []
+    for b in t.blocks:
+        mesh, hole = _block(b, h)
+        parts.append(mesh)
+        holes.append(hole)
+    for r in t.rocks:
+        mesh, hole = _rock(r, h, xs, ys)
+        parts.append(mesh)
+        holes.append(hole)
+    ground = _ground_with_holes(xs, ys, h, [x for x in holes if x is not None])
+    return _join(ground, *[m for m in parts if m is not None])
+
+
+def _solid(verts: np.ndarray, faces: np.ndarray, normals: np.ndarray, tone: np.ndarray) -> TerrainMesh:
+    rgba = np.tile(np.append(tone, 255).astype(np.uint8), (len(verts), 1))
+    return TerrainMesh(verts.astype(np.float32), np.asarray(faces, dtype=np.uint32).reshape(-1, 3),
+                       normals.astype(np.float32), rgba)
+
+
+def _fans(polys: list, normals: list, tone: np.ndarray) -> TerrainMesh:
+    """Convex polygons (k_i, 3), each flat-shaded with its own vertices, as triangle fans."""
+    verts, faces, nrm, base = [], [], [], 0
+    for poly, n in zip(polys, normals):
+        k = len(poly)
+        verts.append(poly)
+        nrm.append(np.tile(n, (k, 1)))
+        faces += [[base, base + i, base + i + 1] for i in range(1, k - 1)]
+        base += k
+    return _solid(np.vstack(verts), np.array(faces), np.vstack(nrm), tone)
+
+
+def _block(b: Block, h: float, tol: float = 1e-9):
+    """A block's faces above the ground (outward winding) and its section at the ground
+    (a CCW polygon (k, 2) to cut from the ground, or None)."""
+    corners = b.corners()
+    if corners[:, 2].max() <= h + tol:
+        return None, None                           # buried: all ground
+    R, ctr, half = b.rotation, np.asarray(b.center, float), 0.5 * np.asarray(b.size, float)
+    polys, normals = [], []
+    for k in range(3):
+        u, v = (k + 1) % 3, (k + 2) % 3             # e_u x e_v = e_k
+        for s in (1.0, -1.0):
+            loc = np.zeros((4, 3))
+            loc[:, k] = s * half[k]
+            loc[:, u] = np.array([-1, 1, 1, -1]) * half[u]
+            loc[:, v] = np.array([-1, -1, 1, 1]) * half[v]
+            face = _clip_above(ctr + (loc if s > 0 else loc[::-1]) @ R.T, h)
+            if len(face) < 3 or face[:, 2].max() <= h + tol:
+                continue                            # below or flat on the ground: not surface
+            polys.append(face)
+            normals.append(s * R[:, k])
+    return _fans(polys, normals, BLOCK_TONE), _section(corners, h, tol)
+
+
+def _clip_above(poly: np.ndarray, h: float) -> np.ndarray:
+    """The part z >= h of a convex polygon (k, 3) (Sutherland–Hodgman, one plane)."""
+    out = []
+    dz = poly[:, 2] - h
+    for i in range(len(poly)):
+        j = (i + 1) % len(poly)
+        if dz[i] >= 0:
+            out.append(poly[i])
+        if dz[i] * dz[j] < 0:
+            p = poly[i] + dz[i] / (dz[i] - dz[j]) * (poly[j] - poly[i])
+            p[2] = h
+            out.append(p)
+    return np.array(out).reshape(-1, 3)
+
+
+def _section(corners: np.ndarray, h: float, tol: float):
+    """A box's section with the plane z = h as a CCW polygon (k, 2), or None if it has no area."""
+    dz = corners[:, 2] - h
+    pts = [corners[i, :2] for i in range(8) if abs(dz[i]) <= tol]
+    for i in range(8):
+        for k in range(3):
+            j = i | (1 << k)
+            if j != i and dz[i] * dz[j] < 0 and abs(dz[i]) > tol and abs(dz[j]) > tol:
+                pts.append((corners[i] + dz[i] / (dz[i] - dz[j]) * (corners[j] - corners[i]))[:2])
+    if len(pts) < 3:
+        return None
+    hull = _hull(np.array(pts))
+    return hull if len(hull) >= 3 and _area(hull) > 1e-12 else None
+
+
+def _hull(p: np.ndarray) -> np.ndarray:
+    """Convex hull of 2-D points, CCW, no collinear points (Andrew's monotone chain)."""
+    p = p[np.lexsort((p[:, 1], p[:, 0]))]
+
+    def half(points):
+        out = []
+        for q in points:
+            while len(out) >= 2 and _cross(out[-2], out[-1], q) <= 1e-15:
+                out.pop()
+            out.append(q)
+        return out[:-1]
+
+    return np.array(half(p) + half(p[::-1]))
+
+
+def _cross(o, a, b) -> float:
+    return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+
+
+def _area(poly: np.ndarray) -> float:
+    x, y = poly[:, 0], poly[:, 1]
+    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+
+
+def _rock(r: Rock, h: float, xs: np.ndarray, ys: np.ndarray, tol: float = 1e-9):
+    """A rock's sphere above the ground (UV rings, outward winding, radial normals) and its rim
+    at the ground (a CCW polygon (k, 2) to cut from the ground, or None)."""
+    ctr, rad = np.asarray(r.center, float), float(r.radius)
+    if ctr[2] + rad <= h + tol:
+        return None, None                           # buried
+    # a facet of edge arc Δ dips about rad·Δ²/4 inside the sphere at its centre
+    step = min(2.0 * np.sqrt(SPHERE_CHORD / rad), np.pi / 8)
+    whole = ctr[2] - rad >= h - tol                 # resting on (or above) the ground: no rim
+    theta_max = np.pi if whole else float(np.arccos((h - ctr[2]) / rad))
+    phi = np.linspace(-np.pi, np.pi, max(16, int(np.ceil(2 * np.pi / step))), endpoint=False)
+    if not whole:
+        phi = _with_crossings(phi, ctr[:2], rad * np.sin(theta_max), xs, ys)
+    n_ring = max(4, int(np.ceil(theta_max / step)))
+    theta = theta_max * np.arange(1, n_ring + 1) / n_ring
+    if whole:
+        theta = theta[:-1]                          # the bottom pole closes it instead of a ring
+    m = len(phi)
+    unit_dirs = [np.array([[0.0, 0.0, 1.0]])]
+    unit_dirs.append((np.sin(theta)[:, None, None] * np.stack([np.cos(phi), np.sin(phi), np.zeros(m)], -1)
+                      + np.cos(theta)[:, None, None] * np.array([0.0, 0.0, 1.0])).reshape(-1, 3))
+    ring = lambda k: 1 + k * m + np.arange(m)           # noqa: E731  vertex ids of ring k
+    nxt = lambda ids: np.roll(ids, -1)                  # noqa: E731
+    faces = [np.column_stack([np.zeros(m, int), ring(0), nxt(ring(0))])]
+    for k in range(len(theta) - 1):
+        a, b = ring(k), ring(k + 1)
+        faces += [np.column_stack([a, b, nxt(b)]), np.column_stack([a, nxt(b), nxt(a)])]
+    if whole:
+        bottom = 1 + len(theta) * m
+        unit_dirs.append(np.array([[0.0, 0.0, -1.0]]))
+        last = ring(len(theta) - 1)
+        faces.append(np.column_stack([last, np.full(m, bottom), nxt(last)]))
+    dirs = np.vstack(unit_dirs)
+    verts = ctr + rad * dirs
+    if not whole:
+        verts[ring(len(theta) - 1), 2] = h          # the rim exactly on the ground
+    mesh = _solid(verts, np.vstack(faces), dirs, ROCK_TONE)
+    return mesh, None if whole else verts[ring(len(theta) - 1), :2]
+
+
+def _with_crossings(phi: np.ndarray, c2: np.ndarray, rho: float, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
+    """Azimuths ``phi`` plus those where the ground's grid lines cross the rim circle (centre c2,
+    radius rho), so the ground's cut edges end on rim vertices; sorted, near-duplicates merged."""
+    cross = []
+    for lines, a in ((xs, 0), (ys, 1)):
+        off = lines - c2[a]
+        off = off[np.abs(off) < rho]
+        along = np.sqrt(rho ** 2 - off ** 2)
+        for o, w in zip(off, along):
+            for sgn in (1.0, -1.0):
+                dx, dy = (o, sgn * w) if a == 0 else (sgn * w, o)
+                cross.append(np.arctan2(dy, dx))
+    if not cross:
+        return phi
+    cross = np.unique(np.round(np.array(cross), 12))
+    gap = np.abs((phi[:, None] - cross[None, :] + np.pi) % (2 * np.pi) - np.pi).min(axis=1)
+    spacing = 2 * np.pi / len(phi)
+    return np.sort(np.concatenate([phi[gap > 0.1 * spacing], cross]))   # no slivers next to a crossing
+
+
+def _ground_with_holes(xs: np.ndarray, ys: np.ndarray, h: float, holes: list) -> TerrainMesh:
+    """The checkerboard ground square with the convex ``holes`` (CCW (k, 2)) cut out exactly:
+    untouched cells as quads, touched cells as the convex pieces of cell minus holes."""
+    X, Y = np.meshgrid(xs, ys, indexing="ij")
+    P = np.stack([X, Y, np.full(X.shape, h)], axis=-1)
+    touched = np.zeros((len(xs) - 1, len(ys) - 1), bool)
+    hits = {}
+    for hole in holes:
+        lo, hi = hole.min(axis=0), hole.max(axis=0)
+        i0, i1 = np.searchsorted(xs, lo[0], "right") - 1, np.searchsorted(xs, hi[0], "left")
+        j0, j1 = np.searchsorted(ys, lo[1], "right") - 1, np.searchsorted(ys, hi[1], "left")
+        for i in range(max(i0, 0), min(i1, len(xs) - 1)):
+            for j in range(max(j0, 0), min(j1, len(ys) - 1)):
+                touched[i, j] = True
+                hits.setdefault((i, j), []).append(hole)
+    parts = [_quads(P, ~touched)] if (~touched).any() else []
+    for (i, j), cell_holes in sorted(hits.items()):
+        pieces = [np.array([[xs[i], ys[j]], [xs[i + 1], ys[j]], [xs[i + 1], ys[j + 1]], [xs[i], ys[j + 1]]])]
+        for hole in cell_holes:
+            pieces = [q for piece in pieces for q in (_minus_convex(piece, hole) if _boxes_meet(piece, hole)
+                                                      else [piece])]
+        if pieces:
+            polys = [np.column_stack([q, np.full(len(q), h)]) for q in pieces]
+            parts.append(_fans(polys, [_Z] * len(polys), ICE[(i + j) % 2]))
+    return _join(*parts)
+
+
+def _boxes_meet(a: np.ndarray, b: np.ndarray) -> bool:
+    return bool((a.min(axis=0) < b.max(axis=0)).all() and (b.min(axis=0) < a.max(axis=0)).all())
+
+
+def _minus_convex(poly: np.ndarray, hole: np.ndarray) -> list:
+    """Convex polygon minus a convex CCW polygon, as convex pieces: the part outside edge i
+    of what is inside edges 0..i-1, for each edge i."""
+    pieces, rest = [], poly
+    for a, b in zip(hole, np.roll(hole, -1, axis=0)):
+        out = _simplify(_clip_side(rest, a, b, left=False))
+        if len(out) >= 3 and _area(out) > 1e-14:
+            pieces.append(out)
+        rest = _clip_side(rest, a, b, left=True)
+        if len(rest) < 3:
+            break
+    return pieces
+
+
+def _simplify(poly: np.ndarray, tol: float = 1e-12) -> np.ndarray:
+    """A convex polygon without repeated or collinear vertices (clipping leaves both; they would
+    give zero-area fan triangles)."""
+    while len(poly) >= 3:
+        prev, nxt = np.roll(poly, 1, axis=0), np.roll(poly, -1, axis=0)
+        a, b = poly - prev, nxt - prev
+        turn = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+        flat = np.abs(turn) <= tol * max(1.0, float(np.ptp(poly, axis=0).max()) ** 2)
+        if not flat.any():
+            break
+        poly = np.delete(poly, np.flatnonzero(flat)[0], axis=0)
+    return poly
+
+
+def _clip_side(poly: np.ndarray, a, b, left: bool) -> np.ndarray:
+    """The part of a convex polygon (k, 2) left (or right) of the line a -> b, boundary included."""
+    s = (b[0] - a[0]) * (poly[:, 1] - a[1]) - (b[1] - a[1]) * (poly[:, 0] - a[0])
+    s = s if left else -s
+    out = []
+    for i in range(len(poly)):
+        j = (i + 1) % len(poly)
+        if s[i] >= 0:
+            out.append(poly[i])
+        if s[i] * s[j] < 0:
+            out.append(poly[i] + s[i] / (s[i] - s[j]) * (poly[j] - poly[i]))
+    return np.array(out).reshape(-1, 2)
 
 
 def _sdf(t: SdfGrid) -> TerrainMesh:

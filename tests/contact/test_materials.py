@@ -53,8 +53,21 @@ def test_bad_material_values_name_material_field_and_value(fields, match):
         Material(**fields)
 
 
+@pytest.mark.parametrize("fields, match", [
+    (dict(name="snow", albedo=1.2), r"material 'snow': albedo = 1.2 must be in \[0, 1\]"),
+    (dict(name="snow", albedo=float("nan")), r"albedo = nan"),
+    (dict(name="rock", color=(0.2, 1.5, 0.1)), r"material 'rock': color = \[0.2, 1.5, 0.1\] must be three values in"),
+    (dict(name="ice", texture="stripes"), r"texture"),
+    (dict(name="ice", texture_size=0.0), r"texture_size"),
+])
+def test_bad_sensor_fields_name_material_and_value(fields, match):
+    with pytest.raises(ValidationError, match=match):
+        Material(**fields)
+
+
 def test_patch_is_the_optional_view_of_material():
-    assert set(MaterialPatch.model_fields) == set(Material.model_fields) - {"name"}
+    # the contact fields; the sensor fields (albedo, colour, texture) are not contact knobs
+    assert set(MaterialPatch.model_fields) == set(COLUMNS)
     with pytest.raises(ValidationError, match=r"material override: mu = -1 must be ≥ 0"):
         MaterialPatch(mu=-1)
     with pytest.raises(ValidationError, match=r"(?s)material\.k.*material override: k = 0 N/m must be > 0"):

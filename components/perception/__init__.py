@@ -1,0 +1,23 @@
+"""Perception: lidar and cameras by ray casting on the CPU (paper 2.2.3, figs. 7, 8, 12).
+
+    sensor_scene   the physical scene at each instant (terrain + posed robot links)  sensor_scene.py
+    lidar          ranges, points and diffuse intensities of a beam pattern          lidar.py, beam_patterns.py
+    camera         depth and shaded image of a camera model                          camera.py, camera_models/
+    stereo_camera  a synchronised pair with a baseline                               camera.py
+    image filters  noise, vignetting, gamma, colour: components after a camera       filters.py
+
+Shared pieces: where a sensor sits (mount.py), what it sees (surfaces.py), how rays are
+cast (ray_caster.py), how surfaces reflect (reflectance.py).
+"""
+
+from .camera import Camera, CameraFrame, StereoCamera
+from .filters import ColorAdjust, Gamma, ImageFilter, ImageNoise, Vignetting
+from .lidar import Lidar, LidarScan
+from .ray_caster import RayHits, SensorWorld
+from .sensor_scene import SensorScene
+
+#: the components this package registers
+PERCEPTION = (SensorScene, Lidar, Camera, StereoCamera, ImageNoise, Vignetting, Gamma, ColorAdjust)
+
+__all__ = ["PERCEPTION", "Camera", "CameraFrame", "ColorAdjust", "Gamma", "ImageFilter", "ImageNoise", "Lidar",
+           "LidarScan", "RayHits", "SensorScene", "SensorWorld", "StereoCamera", "Vignetting"]

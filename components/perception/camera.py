@@ -1,0 +1,192 @@
+"""Cameras: ray-cast depth and shaded images from a frame on a robot link (paper 2.2.3, fig. 7).
+
+Each pixel (u, v) of the camera model (.camera_models: pinhole, fisheye, CAHV, CAHVOR,
+CAHVORE; ``unproject`` of its centre) is a ray from the optical frame, turned into the
+world by the sensor pose (.mount; ``optical: true`` turns a body-convention link frame,
+x forward, into the optical frame, z forward). The ray is cast against the
+``sensor_scene``'s physical objects; the first surface at range r along the ray gives
+
+    range  r                                   m, along the ray
+    depth  z of the hit in the optical frame   m (a ROS depth image's value)
+    image  ρ·(ambient + E·cos θ)               .reflectance: ρ the albedo (grey) or colour (RGB)
+                                               of the material; E the light's irradiance: a
+                                               ``sun`` (optional shadow rays) or a ``headlamp``
+                                               at the camera (falls off as 1/r²)
+
+Pixels whose ray hits nothing within max_range have NaN range and depth and the
+``background`` value. Image values are linear radiance, unbounded (1 = a white surface
+square-on to unit irradiance); the filters after a camera (.filters) add noise, vignetting,
+gamma and colour, and an 8-bit sink saturates at 1.
+
+``camera``         one view:     out ``frame``
+``stereo_camera``  a synchronised pair, the right camera ``baseline`` m along the left's
+                   optical +x:   out ``left``, ``right``
+
+in   world: SensorWorld (from sensor_scene)
+out  CameraFrame (role CAMERA_FRAME) per view, at the component's rate
+uses robot: RobotModel: the mount link
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Literal
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, field_validator
+
+from snakesim.components.multibody.robot_model import RobotModel
+from snakesim.components.port_roles import CAMERA_FRAME
+from snakesim.framework import Component, Input, Output, Params, Uses
+
+from .camera_models import CameraModel, camera_model_from_spec
+from .mount import SensorMount, mount_on, quaternion_xyzw
+from .ray_caster import SensorWorld
+from .hit_kernels import develop
+
+Vec3 = tuple[float, float, float]
+#: shadow rays start this far off the surface (m), so a surface does not shadow itself
+SHADOW_OFFSET = 1e-4
+
+
+@dataclasses.dataclass(frozen=True)
+class CameraFrame:
+    """One camera image. t s; ``frame`` the camera's optical frame name; ``model`` its
+    CameraModel; image (h, w) grey or (h, w, 3) linear RGB float32; depth and range (h, w)
+    float32 m (NaN where nothing is hit); pose (7,) the optical frame in the world
+    [x, y, z, qx, qy, qz, qw]; ``seq`` the sample number."""
+
+    t: float
+    frame: str
+    model: CameraModel
+    image: np.ndarray
+    depth: np.ndarray
+    range: np.ndarray
+    pose: np.ndarray
+    seq: int
+
+    def with_image(self, image: np.ndarray) -> "CameraFrame":
+        """This frame with another image (what a filter returns)."""
+        return dataclasses.replace(self, image=image)
+
+
+class Light(BaseModel):
+    """The scene's light as the camera sees it."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+    kind: Literal["headlamp", "sun"] = Field("headlamp", description="headlamp: at the camera, along its "
+                                                                      "rays (subsurface); sun: parallel rays")
+    direction: Vec3 = Field((0.3, 0.2, -1.0), description="sun: direction the light travels, world")
+    intensity: float = Field(1.0, ge=0, description="irradiance E (headlamp: at reference_range)")
+    ambient: float = Field(0.05, ge=0, description="irradiance reaching every surface")
+    reference_range: float = Field(1.0, gt=0, description="m, headlamp: range of irradiance E")
+    shadows: bool = Field(False, description="sun: cast shadow rays (doubles the rays)")
+
+    @field_validator("direction")
+    @classmethod
+    def _direction(cls, v):
+        if not (np.all(np.isfinite(v)) and np.linalg.norm(v) > 0):
+            raise ValueError(f"direction = {list(v)} must be a finite non-zero vector")
+        return v
+
+
+class CameraParams(SensorMount, Params):
+    link: str = Field("camera_left", description="robot link the camera is fixed to")
+    optical: bool = Field(True, description="the mount frame is body-convention (x forward): turn it to "
+                                            "the optical frame (z forward, x right, y down)")
+    width: int = Field(640, ge=1, description="pixels")
+    height: int = Field(480, ge=1, description="pixels")
+    model: dict = Field(default_factory=lambda: {"kind": "pinhole", "fov": 90.0},
+                        description="camera model (kind: pinhole | fisheye | cahv | cahvor | cahvore, "
+                                    "and its parameters; see camera_models)")
+    color: bool = Field(False, description="RGB image from material colours (else grey from albedo)")
+    light: Light = Field(default_factory=Light)
+    near: float = Field(0.01, ge=0, description="m, nothing nearer is seen (rays start here)")
+    max_range: float = Field(100.0, gt=0, description="m, nothing farther is seen")
+    background: float = Field(0.0, ge=0, description="image value where nothing is hit")
+    name: str | None = Field(None, description="frame name in the outputs (default: the component's)")
+
+
+class StereoCameraParams(CameraParams):
+    baseline: float = Field(0.0675, gt=0, description="m, right camera along the left's optical +x")
+
+
+class _Camera(Component):
+    robot = Uses(RobotModel)
+    world = Input(type=SensorWorld)
+
+    def setup(self):
+        p = self.p
+        if self.rate is None:
+            raise ValueError(f"{self.name}: a camera samples at a rate: give the component a 'rate' (Hz) "
+                             "in the assembly (e.g. rate: 5)")
+        if not p.near < p.max_range:
+            raise ValueError(f"{self.name}: near = {p.near:g} m must be below max_range = {p.max_range:g} m")
+        self.model = camera_model_from_spec(p.model, p.width, p.height, where=f"{self.name}: model")
+        o, d = self.model.pixel_rays()
+        o, d = o.reshape(-1, 3), d.reshape(-1, 3)
+        # pixels without a ray (a 360° fisheye's corners, past a distortion's fold) stay background
+        self._rays = np.flatnonzero(np.isfinite(d).all(axis=1) & np.isfinite(o).all(axis=1))
+        self._o, self._d = np.ascontiguousarray(o[self._rays]), np.ascontiguousarray(d[self._rays])
+        self.row, self.R_ls, self.p_ls = mount_on(self.robot, p, self.name, optical=p.optical)
+        self.frame_id = p.name or self.name
+        light = p.light
+        self._sun = -np.asarray(light.direction, dtype=float) / np.linalg.norm(light.direction)
+
+    def discrete_state(self):
+        return np.zeros(1)       # sample counter
+
+    def update(self, t, xd, u):
+        xd[0] += 1.0
+
+    def pose(self, world: SensorWorld, offset=(0.0, 0.0, 0.0)):
+        """(R_wc, p_wc) of the optical frame, moved by ``offset`` m along its own axes."""
+        R_wl, p_wl = world.link_pose(self.row)
+        R = R_wl @ self.R_ls
+        return R, p_wl + R_wl @ self.p_ls + R @ np.asarray(offset, dtype=float)
+
+    def render(self, world: SensorWorld, R: np.ndarray, p_w: np.ndarray, t: float, seq: int,
+               frame: str) -> CameraFrame:
+        prm, light = self.p, self.p.light
+        h, w = prm.height, prm.width
+        hits, o_w, d_w = world.cast_from(R, p_w, self._o, self._d, prm.max_range, prm.near)
+        headlamp = light.kind == "headlamp"
+        shadowed = np.zeros(len(d_w), dtype=np.bool_)
+        if not headlamp and light.shadows:
+            lit = np.flatnonzero(np.isfinite(hits.distance) & (hits.normal @ self._sun > 0))
+            p_hit = o_w[lit] + hits.distance[lit, None] * d_w[lit] + SHADOW_OFFSET * hits.normal[lit]
+            shadowed[lit] = world.cast(p_hit, np.broadcast_to(self._sun, p_hit.shape), prm.max_range).hit
+        channels = 3 if prm.color else 1
+        image = np.full((h * w, channels), prm.background, dtype=np.float32)
+        rng = np.full(h * w, np.nan, dtype=np.float32)
+        depth = np.full(h * w, np.nan, dtype=np.float32)
+        reflect = hits.color if prm.color else hits.albedo[:, None]
+        develop(self._rays, self._o[:, 2], self._d[:, 2], d_w, hits.distance, hits.normal, reflect, headlamp,
+                self._sun, light.intensity, light.ambient, light.reference_range, shadowed, image, depth, rng)
+        img = image.reshape(h, w, channels)
+        return CameraFrame(t, frame, self.model, img if prm.color else img[:, :, 0], depth.reshape(h, w),
+                           rng.reshape(h, w), np.r_[p_w, quaternion_xyzw(R)], seq)
+
+
+class Camera(_Camera, Component[CameraParams]):
+    type_name = "camera"
+    Params = CameraParams
+    frame = Output(type=CameraFrame, feedthrough=True, role=CAMERA_FRAME, doc="this sample's image")
+
+    def output(self, t, x, u, y):
+        R, p = self.pose(u.world)
+        y.frame = self.render(u.world, R, p, t, int(x[0]), self.frame_id)
+
+
+class StereoCamera(_Camera, Component[StereoCameraParams]):
+    type_name = "stereo_camera"
+    Params = StereoCameraParams
+    left = Output(type=CameraFrame, feedthrough=True, role=CAMERA_FRAME, doc="left image")
+    right = Output(type=CameraFrame, feedthrough=True, role=CAMERA_FRAME, doc="right image, baseline m to the right")
+
+    def output(self, t, x, u, y):
+        seq = int(x[0])
+        R, p = self.pose(u.world)
+        y.left = self.render(u.world, R, p, t, seq, f"{self.frame_id}/left")
+        R, p = self.pose(u.world, (self.p.baseline, 0.0, 0.0))
+        y.right = self.render(u.world, R, p, t, seq, f"{self.frame_id}/right")

@@ -1,0 +1,65 @@
+"""Where a sensor sits: a frame fixed to a robot link.
+
+    R_ws = R_wl · R_ls,   p_ws = p_wl + R_wl · xyz
+
+R_wl, p_wl the link's pose (the multibody's ``link_poses`` row), R_ls = R_z(yaw) R_y(pitch)
+R_x(roll) from ``rpy`` (URDF convention), ``xyz`` m in the link frame. A lidar's frame is
+REP-103 (x forward, y left, z up). A camera's frame is the optical frame (z forward, x
+right, y down, as ROS's ``*_optical_frame``); with ``optical: true`` (default) the mount
+frame is taken as body-convention (x forward) and turned to optical by R_bo below, so
+``link: camera_left`` with no rpy looks along the link's x axis.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field
+from scipy.spatial.transform import Rotation
+
+from snakesim.components.control.joint_selection import match
+from snakesim.components.multibody.robot_model import RobotModel
+from snakesim.components.multibody.urdf import rpy_matrix
+
+Vec3 = tuple[float, float, float]
+
+#: body (x forward, y left, z up) -> optical (z forward, x right, y down): columns are the
+#: optical axes in body coordinates (REP-103's camera_optical_frame, rpy = (−π/2, 0, −π/2))
+BODY_TO_OPTICAL = np.array([[0.0, 0.0, 1.0],
+                            [-1.0, 0.0, 0.0],
+                            [0.0, -1.0, 0.0]])
+
+
+class SensorMount(BaseModel):
+    """A sensor's frame on a robot link."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+    link: str = Field(..., description="robot link (URDF name) the sensor is fixed to")
+    xyz: Vec3 = Field((0.0, 0.0, 0.0), description="m, sensor origin in the link frame")
+    rpy: Vec3 = Field((0.0, 0.0, 0.0), description="rad, sensor axes in the link frame (URDF roll-pitch-yaw)")
+
+
+def mount_on(robot: RobotModel, mount: SensorMount, owner: str, optical: bool = False):
+    """(link row, R_ls (3, 3), p_ls (3,)) of ``mount`` on ``robot``; a ValueError naming the
+    link and listing the robot's links when it does not exist."""
+    if mount.link not in robot.links:
+        match(robot.links, mount.link, f"{owner}: link")       # raises, listing close names
+        raise ValueError(f"{owner}: link must name one link of robot '{robot.label}', not a pattern: "
+                         f"'{mount.link}'")
+    values = np.r_[mount.xyz, mount.rpy]
+    if not np.all(np.isfinite(values)):
+        raise ValueError(f"{owner}: xyz and rpy must be finite, got xyz={list(mount.xyz)}, rpy={list(mount.rpy)}")
+    R = rpy_matrix(list(mount.rpy))
+    if optical:
+        R = R @ BODY_TO_OPTICAL
+    return robot.link_index(mount.link), R, np.array(mount.xyz, dtype=float)
+
+
+def rotations_from_quaternions(q: np.ndarray) -> np.ndarray:
+    """(n, 3, 3) rotation matrices of quaternions (n, 4) in (x, y, z, w) order (link_poses' order)."""
+    return Rotation.from_quat(q).as_matrix()
+
+
+def quaternion_xyzw(R: np.ndarray) -> np.ndarray:
+    """Unit quaternion (x, y, z, w) of a rotation matrix, w ≥ 0."""
+    q = Rotation.from_matrix(R).as_quat()
+    return q if q[3] >= 0 else -q

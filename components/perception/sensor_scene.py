@@ -1,0 +1,80 @@
+"""The physical scene the perception sensors see, once per instant (a ``SensorWorld``).
+
+Every camera and lidar casts against the output of one ``sensor_scene``: the terrain
+(built into an Embree scene on the first step of a run, kept for the run) and the robot's
+link meshes at the current link poses (an Embree scene built at most once per instant, by
+the first sensor that casts, shared by the rest). Evaluating it when no sensor samples
+costs a copy of the link poses.
+
+    scene: {type: sensor_scene, params: {extent: 30}}
+    connections: [terrain.terrain -> scene.terrain, robot.link_poses -> scene.link_poses,
+                  scene.world -> lidar.world, scene.world -> camera.world]
+
+in   terrain   Terrain (optional: without it only the robot is visible)
+     link_poses[nl, 7]   x, y, z m, qx, qy, qz, qw (world), the multibody's
+out  world     SensorWorld at this instant (feedthrough)
+uses robot: RobotModel (optional): the link meshes (its URDF visuals)
+"""
+
+from __future__ import annotations
+
+from pydantic import Field
+
+from snakesim.components.multibody.robot_model import RobotModel
+from snakesim.components.port_roles import LINK_POSES
+from snakesim.components.terrain import Terrain
+from snakesim.framework import Component, Input, Output, Params, Uses
+
+from .ray_caster import SensorWorld, StaticTerrainScene
+from .surfaces import robot_surfaces, terrain_surfaces
+
+Vec3 = tuple[float, float, float]
+
+
+class SensorSceneParams(Params):
+    center: Vec3 = Field((0.0, 0.0, 0.0), description="m, world point the terrain is built around")
+    extent: float = Field(30.0, gt=0, description="m, half-size of the terrain built around center "
+                                                  "(unbounded kinds): beyond it sensors see nothing")
+    cell: float = Field(0.1, gt=0, description="m, tessellation of curved analytic terrains (hits are "
+                                               "refined onto the exact surface)")
+    refine_limit: float = Field(0.5, gt=0, description="m, largest refinement step accepted")
+    robot_visible: bool = Field(True, description="the robot's own bodies occlude and return (self-occlusion)")
+    robot_albedo: float | None = Field(None, ge=0, le=1, description="albedo of every link (None: the "
+                                                                      "mean of each visual's URDF colour)")
+
+
+class SensorScene(Component[SensorSceneParams]):
+    type_name = "sensor_scene"
+    Params = SensorSceneParams
+    robot = Uses(RobotModel, required=False, doc="the link meshes")
+
+    terrain = Input(type=Terrain, required=False)
+    link_poses = Input(shape=lambda c: (c.nl, 7), unit=None, default=0.0, role=LINK_POSES)
+    world = Output(type=SensorWorld, feedthrough=True, doc="the physical scene at this instant")
+
+    def setup(self):
+        self.nl = self.robot.nl if self.robot is not None else 0
+        self._surfaces = None
+        if self.robot is not None and self.p.robot_visible:
+            self._surfaces = robot_surfaces(self.robot, self.p.robot_albedo)
+
+    def make_cache(self, x, u, y):
+        return _TerrainCache()
+
+    def output(self, t, x, u, y):
+        cache = u.cache
+        terrain = u.terrain
+        if terrain is not None and cache.terrain is not terrain:
+            p = self.p
+            cache.terrain = terrain
+            cache.scene = StaticTerrainScene(terrain_surfaces(terrain, p.center, p.extent, p.cell),
+                                             p.refine_limit)
+        y.world = SensorWorld(t, cache.scene, self._surfaces, u.link_poses.copy() if self.nl else None)
+
+
+class _TerrainCache:
+    """This run's terrain Embree scene (built on the first step, from the terrain object it saw)."""
+
+    def __init__(self):
+        self.terrain = None
+        self.scene = None

@@ -1,0 +1,136 @@
+"""What a sensor can see: the physical surfaces as triangles with optical properties.
+
+Built from the same geometry the viewer logs under ``world/physical`` (paper 2.2.3:
+ornamental geometry never occludes a sensor):
+
+    TerrainSurfaces   the terrain's display mesh, uncut (no cut-away), world frame, built once;
+                      per face the albedo and colour of the terrain material at its centroid
+    RobotSurfaces     every link's URDF visual mesh in its link frame, packed once per robot;
+                      per face the albedo and colour of the link's URDF material colour
+                      (albedo = mean of the linear RGB, unless the scene gives one)
+
+Units m; colours linear RGB in [0, 1]. Tethers are not visible (thin ropes: a lidar
+return from a 1 cm rope at 10 m is below any beam's footprint; left out on purpose).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from snakesim.components.multibody.robot_model import RobotModel
+from snakesim.components.terrain import Terrain
+
+
+@dataclasses.dataclass(frozen=True)
+class TerrainSurfaces:
+    """vertices (n, 3) m world, faces (m, 3) int32, material (m,) index into terrain.materials,
+    albedo (m,), color (m, 3); ``refine`` (m,)
+    marks the faces that only approximate a curved analytic surface (their centroid is off the
+    surface by the tessellation's sag): the caster refines hits on them onto the true surface."""
+
+    terrain: Terrain
+    vertices: np.ndarray
+    faces: np.ndarray
+    material: np.ndarray
+    albedo: np.ndarray
+    color: np.ndarray
+    refine: np.ndarray
+
+
+@dataclasses.dataclass(frozen=True)
+class RobotSurfaces:
+    """All link meshes packed: vertices (n, 3) m in their link frames, ``vertex_link`` (n,) the
+    link row (RobotModel.links order, the ``link_poses`` rows) of each vertex, faces (m, 3) int32,
+    ``face_link`` (m,), albedo (m,), color (m, 3)."""
+
+    vertices: np.ndarray
+    vertex_link: np.ndarray
+    faces: np.ndarray
+    face_link: np.ndarray
+    albedo: np.ndarray
+    color: np.ndarray
+
+    def posed(self, rotations: np.ndarray, positions: np.ndarray) -> np.ndarray:
+        """World vertices (n, 3) for link rotations (nl, 3, 3) and origins (nl, 3)."""
+        i = self.vertex_link
+        return np.einsum("nij,nj->ni", rotations[i], self.vertices) + positions[i]
+
+
+def terrain_surfaces(terrain: Terrain, center=(0.0, 0.0, 0.0), extent: float = 30.0,
+                     cell: float = 0.1) -> TerrainSurfaces:
+    """The terrain as a sensor sees it: its display mesh with nothing cut away, ``extent`` (m)
+    around ``center`` for unbounded kinds, curved kinds tessellated at ``cell`` (m)."""
+    from snakesim.components.viz.terrain_geometry import terrain_mesh
+
+    if is_flat(terrain) or _cell_is_only_checkerboard(terrain):
+        cell = extent / 4      # flat ground tessellates exactly: a few large quads
+    mesh = terrain_mesh(terrain, center=center, extent=extent, cell=cell, cutaway=None)
+    V = np.asarray(mesh.vertices, dtype=np.float64)
+    F = np.asarray(mesh.faces, dtype=np.int32)
+    at_centroid = terrain.query(V[F].mean(axis=1))
+    albedo, color = optical_table(terrain.materials)
+    m = at_centroid.material
+    # a flat face lies on the surface to float32 rounding of its vertices (≈1e-7 relative)
+    off = np.abs(at_centroid.distance) > SAG_TOL * np.maximum(1.0, np.abs(V[F[:, 0]]).max(axis=1))
+    return TerrainSurfaces(terrain, V, F, m, albedo[m], color[m], refine=off & is_exact(terrain))
+
+
+#: a face whose centroid is farther than this (relative) from the surface approximates a curve
+SAG_TOL = 1e-6
+
+
+def optical_table(materials) -> tuple[np.ndarray, np.ndarray]:
+    """(albedo (k,), color (k, 3)) of k materials, in order."""
+    return (np.array([m.albedo for m in materials], dtype=np.float64),
+            np.array([m.color for m in materials], dtype=np.float64).reshape(-1, 3))
+
+
+def is_flat(terrain: Terrain) -> bool:
+    """Whether the terrain is made of planes (its mesh is its surface, to float32 rounding)."""
+    from snakesim.components.terrain import ParallelWalls, PlaneTerrain
+
+    return isinstance(terrain, (PlaneTerrain, ParallelWalls))
+
+
+def _cell_is_only_checkerboard(terrain: Terrain) -> bool:
+    """Kinds whose display ``cell`` only sets the flat ground's checkerboard (an obstacle field
+    tessellates its rocks by their own chord tolerance)."""
+    from snakesim.components.terrain import ObstacleField
+
+    return isinstance(terrain, ObstacleField)
+
+
+def is_exact(terrain: Terrain) -> bool:
+    """Whether the terrain's zero level set is its true surface and its display mesh only a
+    tessellation of it (analytic kinds: refine mesh hits onto the surface). A height field's
+    mesh is its own grid and a mesh terrain's mesh is the imported file (its distance grid
+    is the approximation): casting against the mesh is exact for those."""
+    from snakesim.components.terrain import HeightField, SdfGrid
+
+    return not isinstance(terrain, (HeightField, SdfGrid))
+
+
+def robot_surfaces(robot: RobotModel, albedo: float | None = None) -> RobotSurfaces:
+    """Pack ``robot``'s link visual meshes (``robot.derived(link_meshes)``, shared with the viewer)."""
+    from snakesim.components.viz.robot_geometry import link_meshes
+
+    meshes = robot.derived(link_meshes)
+    if not meshes:
+        z = np.zeros((0, 3))
+        return RobotSurfaces(z, np.zeros(0, np.int64), np.zeros((0, 3), np.int32), np.zeros(0, np.int64),
+                             np.zeros(0), z)
+    rows = [robot.link_index(m.link) for m in meshes]
+    offsets = np.cumsum([0] + [len(m.vertices) for m in meshes[:-1]])
+    faces = np.vstack([m.faces.astype(np.int64) + o for m, o in zip(meshes, offsets)]).astype(np.int32)
+    # a face's colour is its first vertex's (visual parts are coloured per part, not per vertex)
+    rgb = np.vstack([m.colors[:, :3] for m in meshes])[faces[:, 0]].astype(np.float64) / 255.0
+    return RobotSurfaces(
+        vertices=np.vstack([m.vertices for m in meshes]).astype(np.float64),
+        vertex_link=np.concatenate([np.full(len(m.vertices), r) for m, r in zip(meshes, rows)]),
+        faces=faces,
+        face_link=np.concatenate([np.full(len(m.faces), r) for m, r in zip(meshes, rows)]),
+        albedo=rgb.mean(axis=1) if albedo is None else np.full(len(faces), float(albedo)),
+        color=rgb,
+    )
