@@ -9,6 +9,10 @@ as class attributes (see :mod:`.ports`) and up to five methods::
     discrete_state()          -> initial discrete state array or None
     update(t, xd, u)          advance the discrete state in place (at its rate)
 
+and two optional step-loop hooks: ``hold(t, u)`` (a gate that may hold the
+loop) and ``edit_state(t, u, edit)`` (requests to change the state between
+steps, :mod:`.state_edit`).
+
 ``x`` is the component's slice of the state the simulator owns (Drake's
 Context idea): the component object keeps parameters and derived constants
 only, so one instance can serve many runs. ``u`` reads inputs (zero-copy
@@ -204,6 +208,17 @@ class Component(Generic[P]):
     @classmethod
     def has_hold(cls) -> bool:
         return cls.hold is not Component.hold
+
+    def edit_state(self, t: float, u, edit) -> None:
+        """Optional: called once per base step right after the gates (``hold``), before the integrator
+        advances past t; it may request state changes through ``edit`` (a
+        :class:`~snakesim.framework.state_edit.StateEdit`: ``reset()``, ``write(component, index, values)``),
+        which the simulator applies as the state at t + dt (see :mod:`~snakesim.framework.state_edit`).
+        A component that overrides it is never pruned. Not called at the last tick."""
+
+    @classmethod
+    def has_edit_state(cls) -> bool:
+        return cls.edit_state is not Component.edit_state
 
     def integrate(self, x: np.ndarray, dx: np.ndarray, out: np.ndarray) -> None:
         """out = x ⊕ dx on the state's manifold; Euclidean by default."""

@@ -8,6 +8,9 @@ At each base tick k (t = t0 + k·dt, never accumulated):
      computed in 1, are held until their next tick: zero-order hold);
   3b. components with a ``hold()`` (gates: pause, single steps, lockstep) may hold
      the loop here; with ``realtime`` the wall time held does not count as lag;
+  3c. components with an ``edit_state()`` may request state changes (reset to the
+     initial state, writes): the step's result at t + dt is then the edited state,
+     the integrator restarts (:mod:`.state_edit`); time still moves forward by dt;
   4. the integrator advances the continuous state to t + dt, re-evaluating
      only the nodes continuous states depend on;
   5. non-finite state stops the run, naming the component, and keeps the last
@@ -34,6 +37,7 @@ import numpy as np
 
 from .errors import SnakesimError
 from .recorder import Recorder
+from .state_edit import StateEdit
 
 logger = logging.getLogger("snakesim.run")
 LAG_WARN_S = 0.1            # s behind the wall clock before a --realtime run warns
@@ -85,7 +89,9 @@ class Simulator:
         flag.reason = flag.source = None
         stop_reason, bad = None, None
         isfinite, copyto = math.isfinite, np.copyto
-        holds = plan.holds
+        holds, edits = plan.holds, plan.edits
+        editor = StateEdit(plan, self.X0, self.XD0) if edits else None
+        n_edits = 0
         wall0 = time.perf_counter()
         next_report = wall0 + 0.5
         held = 0.0                # wall s spent in holds (not lag for realtime pacing)
@@ -115,6 +121,18 @@ class Simulator:
                 for fn, u in holds:
                     fn(t, u)
                 held += time.perf_counter() - h0
+            if edits:
+                for fn, u in edits:
+                    fn(t, u, editor)
+                if editor.requests:
+                    n_edits += 1
+                    stop_reason, bad = self._edit_step(editor, t, dt)
+                    if stop_reason:
+                        break
+                    copyto(X_good, X)
+                    copyto(XD_good, XD)
+                    t_good = t + dt
+                    continue              # the edited state is the state at t + dt
             if has_cont:
                 try:
                     advance(t, t + dt, DX)
@@ -171,6 +189,8 @@ class Simulator:
         }
         if holds:
             summary["held_wall_time_s"] = held
+        if edits:
+            summary["state_edits"] = n_edits
         if realtime:
             summary["realtime_max_lag_s"] = max_lag
         last_good = None
@@ -179,6 +199,26 @@ class Simulator:
                          "components": {s.comp.name: X_good[s.x].copy() for s in plan.slices}}
             summary["last_good_time_s"] = t_good
         return RunResult(log, summary, last_good)
+
+    def _edit_step(self, editor: StateEdit, t: float, dt: float):
+        """One base step whose result is the edited state: integrated first unless a reset replaces the
+        whole state, then the requests applied and the integrator restarted. (stop reason, bad) or
+        (None, None)."""
+        plan, integ = self.plan, self.integrator
+        if plan.nx and not editor.resets:
+            try:
+                integ.advance(t, t + dt, plan.DX)
+            except (SnakesimError, FloatingPointError) as e:
+                editor.requests.clear()
+                return f"integrator {integ.name} failed after t = {t:.6g} s: {e}", True
+        for line in editor.apply():
+            logger.info("state edit at t = %.6g s: %s", t + dt, line)
+        if not (np.isfinite(plan.X).all() and np.isfinite(plan.XD).all()):
+            bad = self._offender()
+            return f"non-finite state in component '{bad[0]}' after t = {t:.6g} s ({bad[1]})", bad
+        if plan.nx:
+            integ.restart()
+        return None, None
 
     def _offender(self) -> tuple[str, str]:
         plan = self.plan

@@ -5,12 +5,19 @@
     template    messages serialised once and patched in place per publish
     publisher   the ros2_publisher sink (/clock, /joint_states, /tf, /robot_description, /imu, /fts/*)
     commands    the ros2_commands source (/joint_commands, /joint_command, /enable_gravity), validated
-    sim_control the ros2_sim_control gate: /sim/pause, /sim/step N, lockstep (--ros2-lockstep)
-    attach, cli ``snakesim run --ros2``: publisher and command source added and wired by port role
+    tether_commands  the ros2_tether_commands source (/tethers/attached), validated
+    rejections  Rejected (a reason naming the field) and the rate-limited rejection log
+    sim_control the ros2_sim_control gate and state editor: /sim/pause, /sim/step N, lockstep
+                (--ros2-lockstep), /sim/reset, /sim/set_pose, /sim/set_joint_positions, services
+    placement_requests  /sim/set_pose and /sim/set_joint_positions validated into state writes
+    services    ROS 2 services on rmw_cyclonedds' conventions (rq/…Request, rr/…Reply, request header)
+    mcap_recorder, mcap_cli  the published topics recorded to MCAP (``--ros2-mcap FILE``)
+    attach, cli ``snakesim run --ros2``: publisher, command sources and sim control added and wired
 """
 
 from .commands import Ros2Commands
 from .publisher import Ros2Publisher
 from .sim_control import Ros2SimControl
+from .tether_commands import Ros2TetherCommands
 
-__all__ = ["Ros2Commands", "Ros2Publisher", "Ros2SimControl"]
+__all__ = ["Ros2Commands", "Ros2Publisher", "Ros2SimControl", "Ros2TetherCommands"]

@@ -23,6 +23,15 @@ has a robot:
               (kind_gains/gains ``mode``) are copied so set-points mean what the PID reads
     q         the robot's JOINT_POSITIONS output (set-points start by holding the joints where they are)
 
+The simulation control gate (``ros2_sim_control``, :func:`attach_sim_control`), always added with the
+publisher: /sim/pause, /sim/step, /sim/reset (topics and services); when the robot provider is a
+multibody (class Multibody) its name is the gate's ``robot_state`` and the gate uses its robot, so
+/sim/set_pose and /sim/set_joint_positions are accepted; its ``world_frame`` is the publisher's.
+
+The tether command source (``ros2_tether_commands``, :func:`attach_tether_commands`), added when the
+scene has a ``tethers`` component (class Tethers) whose ``attached`` input it leaves unconnected:
+``ros2_tether_commands.attached -> tethers.attached`` (/tethers/attached).
+
 The rule when the scene already drives the PID's set-points (a schedule, a gait, joint_setpoints): plain
 ``--ros2`` leaves the scene's connection alone and does not accept joint commands (the source does
 not subscribe to them, and says so once on the ``snakesim.ros2`` logger); ``--ros2-commands`` hands the
@@ -46,9 +55,10 @@ from .publisher import DEFAULT_RATES
 log = logging.getLogger("snakesim.ros2")
 COMMANDS = "ros2_commands"
 SIM_CONTROL = "ros2_sim_control"
+TETHER_COMMANDS = "ros2_tether_commands"
 COMMANDS_RATE = 100.0          # Hz, how often the command topics are polled (rounded to whole base steps)
 #: publisher params the command source shares
-SHARED = ("domain_id", "interface")
+SHARED = ("domain_id", "interface", "node_graph", "ros_distro")
 
 NAME = "ros2"
 ROBOT_ROLES = {LINK_POSES: "link_poses", JOINT_POSITIONS: "joint_positions", JOINT_VELOCITIES: "joint_velocities"}
@@ -72,13 +82,27 @@ def attach_ros2(resolved: Resolved, registry=None, params: dict | None = None) -
     pub = resolved.components[name].params
     both = {**{k: pub[k] for k in SHARED if k in pub}, **shared}
     attach_commands(resolved, registry, both)
-    attach_sim_control(resolved, both)
+    attach_tether_commands(resolved, registry, both)
+    attach_sim_control(resolved, {**both, "world_frame": pub.get("world_frame", "world")}, registry)
     return name
 
 
-def attach_sim_control(resolved: Resolved, params: dict | None = None) -> str:
-    """Add (once) a ``ros2_sim_control`` gate (/sim/pause, /sim/step, lockstep) at the command source's
-    rate; update its params. Its name."""
+def _multibody(resolved: Resolved, registry) -> str | None:
+    """The robot provider when it is a multibody (its state is the robot's [q, v]), else None."""
+    from snakesim.components.multibody import Multibody
+    from snakesim.components.viz.attach import provides_robot
+
+    for comp, _spec, cls in registry.classes_in(resolved):
+        if provides_robot(cls):
+            return comp if isinstance(cls, type) and issubclass(cls, Multibody) else None
+    return None
+
+
+def attach_sim_control(resolved: Resolved, params: dict | None = None, registry=None) -> str:
+    """Add (once) a ``ros2_sim_control`` gate (/sim/pause, /sim/step, lockstep, /sim/reset; placement when
+    the robot is a multibody) at the command source's rate; update its params. Its name."""
+    from snakesim.framework.registry import default_registry
+
     existing = _existing(resolved, SIM_CONTROL)
     if existing is not None:
         spec = resolved.components[existing]
@@ -88,9 +112,43 @@ def attach_sim_control(resolved: Resolved, params: dict | None = None) -> str:
     while name in resolved.components:
         name, k = f"{SIM_CONTROL}_{k}", k + 1
     rate = 1.0 / (nearest_period(COMMANDS_RATE, resolved.sim.dt) * resolved.sim.dt)
-    resolved.components[name] = ComponentSpec(type=SIM_CONTROL, params=dict(params or {}), rate=rate)
+    prm, uses = dict(params or {}), {}
+    robot = _multibody(resolved, registry or default_registry())
+    if robot is not None and "robot_state" not in prm:
+        prm["robot_state"], uses["robot"] = robot, robot
+    resolved.components[name] = ComponentSpec(type=SIM_CONTROL, params=prm, rate=rate, uses=uses)
     resolved.where[name] = "--ros2"
     return name
+
+
+def attach_tether_commands(resolved: Resolved, registry=None, params: dict | None = None) -> str | None:
+    """Add (once) a ``ros2_tether_commands`` source for the first ``tethers`` component whose ``attached``
+    input is free, wired into it; update its params. Its name, or None when there is none."""
+    from snakesim.components.tethers import Tethers
+    from snakesim.framework.registry import default_registry
+
+    existing = _existing(resolved, TETHER_COMMANDS)
+    if existing is not None:
+        spec = resolved.components[existing]
+        resolved.components[existing] = spec.model_copy(update={"params": {**spec.params, **(params or {})}})
+        return existing
+    into = {d for _s, d, _w in resolved.connections}
+    for comp, spec, cls in (registry or default_registry()).classes_in(resolved):
+        if not (isinstance(cls, type) and issubclass(cls, Tethers)) or f"{comp}.attached" in into:
+            continue
+        prm = _params(cls, spec)
+        if prm is None:
+            continue
+        name, k = TETHER_COMMANDS, 1
+        while name in resolved.components:
+            name, k = f"{TETHER_COMMANDS}_{k}", k + 1
+        rate = 1.0 / (nearest_period(COMMANDS_RATE, resolved.sim.dt) * resolved.sim.dt)
+        resolved.components[name] = ComponentSpec(type=TETHER_COMMANDS, rate=rate,
+                                                  params={**(params or {}), "tethers": len(prm.tethers)})
+        resolved.connections.append((f"{name}.attached", f"{comp}.attached", "--ros2"))
+        resolved.where[name] = "--ros2"
+        return name
+    return None
 
 
 def _attach_publisher(resolved: Resolved, registry=None, params: dict | None = None) -> str:

@@ -4,6 +4,8 @@
     --ros2-domain N           DDS domain id (default ROS_DOMAIN_ID, else 0); implies --ros2
     --ros2-interface IF       network interface or address (default 127.0.0.1: this machine only,
                               no multicast); implies --ros2
+    --ros2-distro D           humble (default) or jazzy: the node-graph announcement's layout
+                              (ros_discovery_info, :mod:`.node_graph`); implies --ros2
     --ros2-rate TOPIC=HZ      per-topic rate (clock, joint_states, tf, imu, wrench, real_time_factor;
                               0: off), repeatable;
                               implies --ros2
@@ -18,7 +20,13 @@
     --ros2-hold-timeout S     stop the run after S wall seconds held with no request (default 0: wait
                               for ever); implies --ros2
 
---ros2 always adds the ros2_sim_control gate: /sim/pause (std_msgs/Bool), /sim/step (std_msgs/UInt32).
+--ros2 always adds the ros2_sim_control gate (:mod:`.sim_control`): /sim/pause (std_msgs/Bool), /sim/step
+(std_msgs/UInt32), /sim/reset (std_msgs/Empty) and the services /sim/reset (std_srvs/srv/Empty) and
+/sim/pause (std_srvs/srv/SetBool); with a multibody robot also /sim/set_pose (geometry_msgs/PoseStamped)
+and /sim/set_joint_positions (sensor_msgs/JointState). With a ``tethers`` component whose ``attached``
+input the scene leaves free it adds the ros2_tether_commands source: /tethers/attached
+(std_msgs/UInt8MultiArray). These are harmless when unused (nothing changes until a request arrives),
+so they are on by default.
 """
 
 from __future__ import annotations
@@ -45,6 +53,12 @@ def _interface(resolved, value):
     from .attach import attach_ros2
 
     attach_ros2(resolved, params={"interface": value})
+
+
+def _distro(resolved, value):
+    from .attach import attach_ros2
+
+    attach_ros2(resolved, params={"ros_distro": value})
 
 
 def _rates(resolved, value):
@@ -81,11 +95,11 @@ def _rates(resolved, value):
 def _commands(resolved, value):
     if not value:
         return
-    from .attach import attach_commands, attach_ros2
+    from .attach import SHARED, attach_commands, attach_ros2
 
     name = attach_ros2(resolved)
     pub = resolved.components[name].params
-    attach_commands(resolved, params={k: pub[k] for k in ("domain_id", "interface") if k in pub}, takeover=True)
+    attach_commands(resolved, params={k: pub[k] for k in SHARED if k in pub}, takeover=True)
 
 
 def _sim(**params):
@@ -105,12 +119,17 @@ def ros2_run_options():
         (click.Option(["--ros2"], is_flag=True, default=None,
                       help="Publish the robot on ROS 2 (Cyclone DDS; /clock, /joint_states, /tf, /tf_static, "
                            "/robot_description, /sim/real_time_factor, /imu and /fts/* when present; "
-                           "/sim/pause and /sim/step accepted); loopback only by default."), _ros2),
+                           "/sim/pause, /sim/step, /sim/reset, /sim/set_pose, /sim/set_joint_positions, "
+                           "/tethers/attached and the /sim/reset and /sim/pause services accepted); loopback only "
+                           "by default."), _ros2),
         (click.Option(["--ros2-domain"], type=click.IntRange(0, 232), default=None,
                       help="ROS 2 domain id (default: ROS_DOMAIN_ID, else 0); implies --ros2."), _domain),
         (click.Option(["--ros2-interface"], default=None,
                       help="Network interface or address for ROS 2 (default 127.0.0.1: this machine only, "
                            "no multicast); implies --ros2."), _interface),
+        (click.Option(["--ros2-distro"], type=click.Choice(["humble", "jazzy"]), default=None,
+                      help="ROS 2 distribution of the nodes that list snakesim's node graph (ros_discovery_info: "
+                           "its Gid layout changed after Humble; default humble); implies --ros2."), _distro),
         (click.Option(["--ros2-rate"], multiple=True, default=None, metavar="TOPIC=HZ",
                       help="ROS 2 topic rate: clock, joint_states, tf, imu, wrench, real_time_factor (0: off); repeatable; "
                            "implies --ros2."), _rates),

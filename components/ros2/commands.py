@@ -10,14 +10,23 @@ leaves the others as they were).
 
 Topics (types: :mod:`.messages`, from rosbags' standard definitions):
 
-    /joint_commands   trajectory_msgs/JointTrajectory   joint_names and points[0] (positions and/or
-                                                        velocities) applied at once; later points and
-                                                        time_from_start are ignored this round (no
-                                                        interpolation yet)
+    /joint_commands   trajectory_msgs/JointTrajectory   joint_names and points (positions and/or
+                                                        velocities), followed in time (below)
     /joint_command    sensor_msgs/JointState            name with position and/or velocity (effort is
                                                         ignored)
     /enable_gravity   std_msgs/Bool                     gravity output 1 (on) or 0 (off), for the
                                                         multibody's gravity input in "scale" mode
+
+Trajectories: point i is due at T_i = start + points[i].time_from_start, where
+start is header.stamp (simulated time) or, for an unstamped (zero) header,
+the sim time of the tick that took the message. Before T_0 the joints keep
+their previous set-points; between T_i and T_(i+1) every value a point gives
+(positions, velocities) is interpolated linearly in time at each tick of the
+source; from the last point's time on its values are held. A single point
+with time_from_start 0 is applied at once. time_from_start must be >= 0 and
+strictly increasing. A later command (a trajectory or a JointState) takes
+over the joints it names from any trajectory still running; the others go
+on.
 
 Set-points follow the PID's convention (:mod:`snakesim.components.control.pid`):
 ``setpoint`` is the position (rad) of position-controlled joints and the
@@ -40,6 +49,10 @@ in ``rejected`` and never applied (the run goes on):
     |position| > max_abs_position, |velocity| > max_abs_velocity (out of range)
     a stamped header (stamp ≠ 0) older than sim time by more than max_age (stale);
     an unstamped (zero) header is not checked
+    a trajectory's time_from_start negative or not increasing from one point to the next
+
+The warning for one reason is written at most once per wall second, with a
+count of those not written (:mod:`.rejections`).
 
 Before the first valid command the set-points hold the measured joint
 positions at the first tick (``q`` wired; else ``initial``, else 0), the
@@ -61,7 +74,6 @@ out  setpoint[nj]   rad (position joints) or rad/s (velocity joints), for pid.se
 from __future__ import annotations
 
 import dataclasses
-import logging
 import math
 import weakref
 
@@ -74,9 +86,10 @@ from snakesim.components.multibody.robot_model import RobotModel
 from snakesim.components.port_roles import JOINT_POSITIONS
 from snakesim.framework import Component, Input, Output, Uses
 
+from .rejections import Rejected, RejectionLog, check_stamp
 from .transport import DdsEndpoint
 
-log = logging.getLogger("snakesim.ros2")
+__all__ = ["Rejected", "Ros2Commands", "Trajectory"]
 
 TRAJECTORY_TOPIC = "/joint_commands"
 JOINT_TOPIC = "/joint_command"
@@ -105,10 +118,6 @@ def _nj(c):
 
 def _joints(c):
     return c.robot.joints
-
-
-class Rejected(ValueError):
-    """A command that is not applied; the message names the field and value."""
 
 
 class Ros2Commands(Component[Ros2CommandsParams]):
@@ -147,13 +156,7 @@ class Ros2Commands(Component[Ros2CommandsParams]):
 
     # -- validation: pure functions of the message and sim time -----------------------------
     def _stamp(self, topic: str, header, t: float) -> None:
-        s = header.stamp
-        if s.sec == 0 and s.nanosec == 0:
-            return
-        st = s.sec + 1e-9 * s.nanosec
-        if t - st > self.p.max_age:
-            raise Rejected(f"{topic}: header.stamp = {st:.9g} s is stale: {t - st:.6g} s older than sim time "
-                           f"{t:.9g} s (max_age {self.p.max_age:g} s)")
+        check_stamp(topic, header, t, self.p.max_age)
 
     def _values(self, topic: str, names, positions, velocities, where: str):
         """Validate one command; its (joint indices, setpoint, rate) to apply."""
@@ -199,19 +202,37 @@ class Ros2Commands(Component[Ros2CommandsParams]):
         return idx, sp, rate
 
     def validate(self, topic: str, msg, t: float):
-        """What a valid message applies: ('joints', idx, setpoint, rate) or ('gravity', 1.0 | 0.0).
-        Raises :class:`Rejected` (its text names the field and value) otherwise."""
+        """What a valid message applies: ('joints', idx, setpoint, rate), ('trajectory', Trajectory) or
+        ('gravity', 1.0 | 0.0). Raises :class:`Rejected` (its text names the field and value) otherwise."""
         if topic == GRAVITY_TOPIC:
             return ("gravity", 1.0 if msg.data else 0.0)
         self._stamp(topic, msg.header, t)
         if topic == TRAJECTORY_TOPIC:
-            if not msg.points:
-                raise Rejected(f"{topic}: points is empty")
-            pt = msg.points[0]
-            return ("joints",) + self._values(topic, msg.joint_names, pt.positions, pt.velocities,
-                                              ("joint_names", "points[0].positions", "points[0].velocities"))
+            return ("trajectory", self._trajectory(topic, msg, t))
         return ("joints",) + self._values(topic, msg.name, msg.position, msg.velocity,
                                           ("name", "position", "velocity"))
+
+    def _trajectory(self, topic: str, msg, t: float) -> "Trajectory":
+        if not msg.points:
+            raise Rejected(f"{topic}: points is empty")
+        s = msg.header.stamp
+        start = s.sec + 1e-9 * s.nanosec if (s.sec or s.nanosec) else t
+        times, sps, rates = [], [], []
+        idx = None
+        for i, pt in enumerate(msg.points):
+            d = pt.time_from_start
+            tfs = d.sec + 1e-9 * d.nanosec
+            if tfs < 0:
+                raise Rejected(f"{topic}: points[{i}].time_from_start = {tfs:.9g} s is negative")
+            if times and not tfs > times[-1] - start:
+                raise Rejected(f"{topic}: points[{i}].time_from_start = {tfs:.9g} s is not after "
+                               f"points[{i - 1}].time_from_start = {times[-1] - start:.9g} s")
+            idx, sp, rate = self._values(topic, msg.joint_names, pt.positions, pt.velocities,
+                                         ("joint_names", f"points[{i}].positions", f"points[{i}].velocities"))
+            times.append(start + tfs)
+            sps.append(sp)
+            rates.append(rate)
+        return Trajectory(idx, np.array(times), np.array(sps), np.array(rates))
 
     # -- DDS --------------------------------------------------------------------------------
     def topics(self) -> list[tuple[str, type]]:
@@ -230,6 +251,7 @@ class Ros2Commands(Component[Ros2CommandsParams]):
         dds = Ros2Participant(self.p.domain_id, self.p.interface)
         run.readers = tuple((topic, typ, dds.reader(topic, typ)) for topic, typ in self.topics())
         run.dds = dds
+        self.p.announce(dds, "snakesim_commands")              # ros2 node list (:mod:`.node_graph`)
         run.finalizer = weakref.finalize(run, dds.close)
 
     def _take(self, run: "CommandsRun") -> list:
@@ -257,26 +279,80 @@ class Ros2Commands(Component[Ros2CommandsParams]):
             self._open(run)
         for topic, msg in self._take(run):
             self.apply(run, topic, msg, t, y)
+        if run.trajectories:
+            run.trajectories = [tr for tr in run.trajectories if tr.follow(t, y.setpoint, y.rate)]
 
     def apply(self, run: "CommandsRun", topic: str, msg, t: float, y) -> bool:
-        """Validate ``msg`` and apply it to the held outputs ``y``; False (logged, counted) if rejected."""
+        """Validate ``msg`` and apply it to the held outputs ``y`` (a trajectory: to the running ones,
+        followed at each tick); False (logged, counted) if rejected."""
         try:
             what = self.validate(topic, msg, t)
         except Rejected as e:
             run.rejected += 1
             run.last_reason = str(e)
             y.rejected[0] = run.rejected
-            log.warning("%s: rejected at t = %.6g s: %s", self.name, t, e)
+            if run.log is None:
+                run.log = RejectionLog(self.name)
+            run.log(t, e)
             return False
         if what[0] == "gravity":
             y.gravity[0] = what[1]
         else:
-            _, idx, sp, rate = what
-            y.setpoint[idx] = sp
-            y.rate[idx] = rate
+            new = what[1] if what[0] == "trajectory" else None
+            idx = new.idx if new is not None else what[1]
+            run.trajectories = [tr for tr in run.trajectories if tr.release(idx)]      # taken over
+            if new is not None:
+                run.trajectories.append(new)
+            else:
+                _, idx, sp, rate = what
+                y.setpoint[idx] = sp
+                y.rate[idx] = rate
         run.applied += 1
         y.applied[0] = run.applied
         return True
+
+
+@dataclasses.dataclass(eq=False)
+class Trajectory:
+    """A running JointTrajectory: joints ``idx``, point times ``times`` (s, simulated, increasing) and
+    per point the set-points and rates of those joints; ``live`` marks the joints no later command
+    took over."""
+
+    idx: np.ndarray
+    times: np.ndarray
+    setpoints: np.ndarray          # (points, joints)
+    rates: np.ndarray
+    live: np.ndarray | None = None
+
+    def __post_init__(self):
+        if self.live is None:
+            self.live = np.ones(self.idx.size, dtype=bool)
+
+    def values(self, t: float):
+        """(set-points, rates) at sim time t, or None before the first point's time."""
+        T = self.times
+        i = int(np.searchsorted(T, t, side="right")) - 1
+        if i < 0:
+            return None
+        if i >= T.size - 1:
+            return self.setpoints[-1], self.rates[-1]
+        a = (t - T[i]) / (T[i + 1] - T[i])
+        sp, rt = self.setpoints, self.rates
+        return sp[i] + a * (sp[i + 1] - sp[i]), rt[i] + a * (rt[i + 1] - rt[i])
+
+    def follow(self, t: float, setpoint: np.ndarray, rate: np.ndarray) -> bool:
+        """Write the values at t into the outputs (live joints only); False once it is over."""
+        v = self.values(t)
+        if v is not None:
+            live = self.live
+            setpoint[self.idx[live]] = v[0][live]
+            rate[self.idx[live]] = v[1][live]
+        return not t >= self.times[-1]
+
+    def release(self, idx: np.ndarray) -> bool:
+        """Hand the joints ``idx`` to a later command; False when no joint is left."""
+        self.live &= ~np.isin(self.idx, idx)
+        return bool(self.live.any())
 
 
 @dataclasses.dataclass(eq=False)
@@ -289,6 +365,8 @@ class CommandsRun:
     rejected: int = 0
     applied: int = 0
     last_reason: str = ""
+    trajectories: list = dataclasses.field(default_factory=list)   # running JointTrajectory commands
+    log: RejectionLog | None = None
     finalizer: object = None
 
     def close(self) -> None:

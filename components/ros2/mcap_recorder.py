@@ -8,8 +8,11 @@ included). Channels: topic ``/joint_states`` etc., message encoding ``cdr``;
 schemas: encoding ``ros2msg``, the .msg text with its dependencies as ROS 2
 writes it (from rosbags' standard definitions, :func:`schema_text`), so
 ``ros2 bag``, Foxglove and ``mcap-ros2-support`` decode it. Log and publish
-times are simulated time (ns). ``/robot_description`` is written once, on the
-first tick.
+times are simulated time (ns). ``/robot_description`` and ``/tf_static`` (the
+URDF's fixed joints, as the publisher latches them; QoS metadata transient
+local) are written once, on the first tick; ``/sim/real_time_factor``
+(std_msgs/Float64, sim s per wall s over the last window) at its rate, as
+published.
 
 An interrupted run leaves a readable file: the writer flushes its chunk and
 the file every ``flush_period`` wall seconds (and the summary and footer are
@@ -65,6 +68,20 @@ class McapChannel:
         run.writer.add_message(self.channel_id, log_time=run.now_ns, data=bytes(buf), publish_time=run.now_ns,
                                sequence=self.count)
         self.count += 1
+
+
+class McapMessageWriter:
+    """Stands where the publisher has a DDS writer of whole messages (``write(msg)``): serialises like
+    ``DataWriter.write`` (padded to 4 bytes) into one MCAP message."""
+
+    __slots__ = ("channel",)
+
+    def __init__(self, channel: McapChannel):
+        self.channel = channel
+
+    def write(self, msg) -> None:
+        raw = msg.serialize()
+        self.channel.write(raw.ljust((len(raw) + 3) & ~3, b"\0"))
 
 
 class McapFile:
@@ -134,8 +151,18 @@ class Ros2McapRecorder(Ros2Publisher):
             from . import messages as M
 
             cid = f.channel("/robot_description", M.String.ros_name, latched=True)
-            raw = M.String(data=self.robot.urdf).serialize()
-            McapChannel(run, cid).write(raw.ljust((len(raw) + 3) & ~3, b"\0"))     # as DataWriter.write pads it
+            McapMessageWriter(McapChannel(run, cid)).write(M.String(data=self.robot.urdf))
+        if self.static:
+            from . import messages as M
+
+            cid = f.channel("/tf_static", M.TFMessage.ros_name, latched=True)
+            McapMessageWriter(McapChannel(run, cid)).write(self.static_message(run.now_ns * 1e-9))
+        if self.rtf_period:
+            from . import messages as M
+            from .publisher import RTF_TOPIC
+
+            cid = f.channel(RTF_TOPIC, M.Float64.ros_name)
+            run.rtf = (self.rtf_period, McapMessageWriter(McapChannel(run, cid)), M.Float64)
         self._schedule(run, writers, u)
         run.dds = f
         run.next_flush = time.monotonic() + p.flush_period
@@ -193,7 +220,7 @@ def sync_recorder(resolved, pub: str, name: str | None = None, path: str | None 
     spec = resolved.components[pub]
     if path is None:
         path = resolved.components[name].params["path"]
-    params = {k: v for k, v in spec.params.items() if k not in ("domain_id", "interface")}
+    params = {k: v for k, v in spec.params.items() if k not in ("domain_id", "interface", "node_graph", "ros_distro")}
     resolved.components[name] = spec.model_copy(update={"type": MCAP, "params": {**params, "path": str(path)}})
     resolved.connections[:] = [c for c in resolved.connections if not c[1].startswith(f"{name}.")]
     resolved.connections.extend((s, f"{name}.{d.split('.', 1)[1]}", "--ros2-mcap")

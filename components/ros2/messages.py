@@ -9,6 +9,16 @@ the same domain (rmw_cyclonedds or rmw_fastrtps: plain XCDR1) decodes them;
 tests/ros2/test_messages.py checks that bytes serialised by cyclonedds decode
 with rosbags' own CDR codec to the same values.
 
+Services: ``rosbags`` ships no std_srvs, so the three std_srvs services used
+(Empty, Trigger, SetBool) are derived here from their .srv text
+(:data:`SRV_TEXT`, as in ros2/common_interfaces) with rosbags' own .msg parser
+and registered in the same typestore as ``std_srvs/srv/<Type>_Request`` and
+``_Response``. On the wire rmw_cyclonedds prefixes every request and reply
+with its request header (``cdds_request_header_t``: the client's 64-bit
+writer id ``guid`` and the 64-bit sequence number ``seq``, plain CDR before the
+message's fields); :func:`service_types` builds those wrapped types, DDS type
+names ``std_srvs::srv::dds_::<Type>_Request_`` / ``_Response_``.
+
 Use them as dataclasses (every field has a default: zeros, empty strings and
 sequences, nested defaults)::
 
@@ -42,12 +52,31 @@ _ZERO = {bool: False, str: "", T.float32: 0.0, T.float64: 0.0}
 _DEFAULTS = {"geometry_msgs/msg/Quaternion": {"w": 1.0}}
 
 
-@lru_cache(maxsize=1)
-def typestore():
-    """rosbags' typestore of the standard ROS 2 messages (the reference definitions and CDR codec)."""
-    from rosbags.typesys import Stores, get_typestore
+#: std_srvs' .srv files (ros2/common_interfaces; comments dropped): request, then response, split at ---
+SRV_TEXT = {
+    "std_srvs/srv/Empty": "---\n",
+    "std_srvs/srv/Trigger": "---\nbool success\nstring message\n",
+    "std_srvs/srv/SetBool": "bool data\n---\nbool success\nstring message\n",
+}
 
-    return get_typestore(getattr(Stores, STORE))
+
+@lru_cache(maxsize=None)
+def typestore(store_name: str = STORE):
+    """rosbags' typestore of the standard ROS 2 messages (the reference definitions and CDR codec), with
+    the std_srvs request and response types of :data:`SRV_TEXT` registered. ``store_name``: another
+    distribution's (the node-graph types differ between Humble and Jazzy: :mod:`.node_graph`)."""
+    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+    store = get_typestore(getattr(Stores, store_name))
+    types = {}
+    for srv, text in SRV_TEXT.items():
+        request, response = text.split("---\n")
+        for part, body in (("Request", request), ("Response", response)):
+            # rosbags' parser files a name under .../srv/msg/...; ROS 2 calls it pkg/srv/Type_Request
+            types.update({k.replace("/srv/msg/", "/srv/"): v
+                          for k, v in get_types_from_msg(body, f"{srv}_{part}").items()})
+    store.register(types)
+    return store
 
 
 def dds_type_name(ros_name: str) -> str:
@@ -66,7 +95,7 @@ def _base(spec):
     return t, _ZERO.get(t, 0)
 
 
-def _field(node):
+def _field(node, store_name: str = STORE):
     """(annotation, default factory) of one rosbags field definition."""
     from rosbags.typesys.base import Nodetype
 
@@ -75,40 +104,50 @@ def _field(node):
         t, zero = _base(spec)
         return t, (lambda z=zero: z)
     if kind == Nodetype.NAME:
-        cls = ros_type(spec)
+        cls = ros_type(spec, store_name=store_name)
         return cls, cls
     if kind in (Nodetype.ARRAY, Nodetype.SEQUENCE):
         (inner, n) = spec
-        t, make = _field(inner)
+        t, make = _field(inner, store_name)
         if kind == Nodetype.ARRAY:
             return T.array[t, n], (lambda: [make() for _ in range(n)])
         return (T.sequence[t, n] if n else T.sequence[t]), list
     raise TypeError(f"unknown rosbags field kind {kind}")
 
 
+#: the request header rmw_cyclonedds puts before a request's or reply's fields (cdds_request_header_t)
+REQUEST_HEADER = (("header_guid", T.uint64), ("header_seq", T.int64))
+
+
 @lru_cache(maxsize=None)
-def ros_type(ros_name: str) -> type[IdlStruct]:
-    """The IdlStruct of a standard ROS 2 message ('pkg/msg/Type'), built from rosbags' definition."""
-    store = typestore()
+def ros_type(ros_name: str, request_header: bool = False, store_name: str = STORE) -> type[IdlStruct]:
+    """The IdlStruct of a standard ROS 2 message ('pkg/msg/Type'), built from rosbags' definition;
+    ``request_header``: with rmw_cyclonedds' service header first (``header_guid``, ``header_seq``);
+    ``store_name``: from another distribution's definitions (default :data:`STORE`)."""
+    store = typestore(store_name)
     try:
         _consts, fields = store.fielddefs[ros_name]
     except KeyError:
-        raise KeyError(f"'{ros_name}' is not in rosbags' {STORE} typestore") from None
+        raise KeyError(f"'{ros_name}' is not in rosbags' {store_name} typestore") from None
     typename = dds_type_name(ros_name)
-    cls_name = ros_name.rsplit("/", 1)[-1]
+    cls_name = ros_name.rsplit("/", 1)[-1] + ("_Wire" if request_header else "")
     ns = IdlMeta.__prepare__(cls_name, (IdlStruct,), typename=typename)
     if not fields:            # an empty .msg has one uint8 'structure_needs_at_least_one_member' in ROS 2's IDL
         from rosbags.typesys.base import Nodetype
 
         fields = [("structure_needs_at_least_one_member", (Nodetype.BASE, ("uint8", 0)))]
+    if request_header:
+        for fname, t in REQUEST_HEADER:
+            ns["__annotations__"][fname] = t
+            ns[fname] = dataclasses.field(default=0)
     given = _DEFAULTS.get(ros_name, {})
     for fname, node in fields:
-        t, make = _field(node)
+        t, make = _field(node, store_name)
         if fname in given:
             make = (lambda v=given[fname]: v)
         ns["__annotations__"][fname] = t
         ns[fname] = dataclasses.field(default_factory=make)
-    ns["__doc__"] = f"ROS 2 {ros_name} (DDS type {typename}), from rosbags' {STORE} definition."
+    ns["__doc__"] = f"ROS 2 {ros_name} (DDS type {typename}), from rosbags' {store_name} definition."
     ns["__module__"] = __name__
     ns["ros_name"] = ros_name       # plain class attribute (no annotation): not a field
     cls = IdlMeta(cls_name, (IdlStruct,), ns, typename=typename)
@@ -136,10 +175,27 @@ Imu = ros_type("sensor_msgs/msg/Imu")
 JointTrajectoryPoint = ros_type("trajectory_msgs/msg/JointTrajectoryPoint")
 JointTrajectory = ros_type("trajectory_msgs/msg/JointTrajectory")
 
+Empty = ros_type("std_msgs/msg/Empty")
+MultiArrayDimension = ros_type("std_msgs/msg/MultiArrayDimension")
+MultiArrayLayout = ros_type("std_msgs/msg/MultiArrayLayout")
+UInt8MultiArray = ros_type("std_msgs/msg/UInt8MultiArray")
+Point = ros_type("geometry_msgs/msg/Point")
+Pose = ros_type("geometry_msgs/msg/Pose")
+PoseStamped = ros_type("geometry_msgs/msg/PoseStamped")
+
 #: every type above, by ROS name (what the tests check against rosbags)
 USED = {c.ros_name: c for c in (Time, Duration, Header, String, Bool, Float64, UInt32, Clock, Vector3, Quaternion,
                                 Transform, TransformStamped, Wrench, WrenchStamped, TFMessage, JointState, Imu,
-                                JointTrajectoryPoint, JointTrajectory)}
+                                JointTrajectoryPoint, JointTrajectory, Empty, MultiArrayDimension, MultiArrayLayout,
+                                UInt8MultiArray, Point, Pose, PoseStamped)}
+
+
+def service_types(srv: str) -> tuple[type[IdlStruct], type[IdlStruct]]:
+    """(request, response) of service ``srv`` ('std_srvs/srv/Empty') as rmw_cyclonedds puts them on the wire:
+    DDS types ``<pkg>::srv::dds_::<Type>_Request_`` / ``_Response_`` with the request header first."""
+    if srv not in SRV_TEXT:
+        raise KeyError(f"service type '{srv}' is not defined here; defined: {', '.join(SRV_TEXT)}")
+    return ros_type(f"{srv}_Request", request_header=True), ros_type(f"{srv}_Response", request_header=True)
 
 
 def time_msg(t: float, out=None):

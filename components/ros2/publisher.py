@@ -28,6 +28,8 @@ Topics (QoS: :mod:`.transport`; types: :mod:`.messages`):
                                                    diag(imu_gyro_noise²), diag(imu_accel_noise²), orientation
                                                    covariance 0 (exact)
     /fts/<cut joint>    geometry_msgs/WrenchStamped  one per sensor of params.wrench_cuts (frame_id: its link)
+    ros_discovery_info  rmw_dds_common/ParticipantEntitiesInfo  node /snakesim with these writers, latched
+                                                   (params.node_graph, ros_distro: :mod:`.node_graph`)
 
 Stamps are simulated time. The messages are serialised once and patched in
 place each tick (:mod:`.template`): a publish allocates nothing per joint or
@@ -218,6 +220,7 @@ class Ros2Publisher(Component[Ros2PublisherParams]):
             run.rtf = (self.rtf_period, dds.writer(RTF_TOPIC, M.Float64), M.Float64)
         self._schedule(run, writers, u)
         run.dds = dds
+        self.p.announce(dds, "snakesim")              # ros2 node list (:mod:`.node_graph`)
         run.finalizer = weakref.finalize(run, dds.close)
 
     def _schedule(self, run: "PublisherRun", writers: dict, u) -> None:

@@ -4,7 +4,8 @@ No ROS installation: Cyclone DDS (``cyclonedds``), the RMW that ROS 2 ships by
 default in several distributions, speaking the same RTPS wire protocol.
 ROS 2's conventions on top of DDS:
 
-    topic names     ``rt/<name>`` for topic ``/<name>`` (``rq/…Request``, ``rr/…Reply`` for services)
+    topic names     ``rt/<name>`` for topic ``/<name>``; ``rq/<name>Request``, ``rr/<name>Reply`` for
+                    service ``/<name>`` (:mod:`.services`)
     type names      ``<pkg>::msg::dds_::<Type>_`` (:mod:`.messages`)
     encoding        plain CDR (XCDR1), as rmw_cyclonedds and rmw_fastrtps write it
     QoS             the profiles of rclcpp/tf2 (:data:`QOS`): default (reliable, keep last 10,
@@ -12,6 +13,10 @@ ROS 2's conventions on top of DDS:
                     ``/tf`` as tf2's DynamicBroadcasterQoS (reliable, keep last 100);
                     ``/tf_static`` and ``/robot_description`` latched (reliable, transient local,
                     keep last 1), so a node that starts later still gets them
+
+Node graph: a participant can announce its endpoints as a ROS node on
+``ros_discovery_info`` (:meth:`Ros2Participant.announce`, :mod:`.node_graph`),
+so ``ros2 node list`` shows it.
 
 Network: by default traffic stays on this machine. Cyclone is configured
 (its XML, per domain, given to ``Domain``; nothing in the environment is read
@@ -33,6 +38,7 @@ import os
 import threading
 import weakref
 from dataclasses import dataclass
+from typing import Literal
 
 from pydantic import Field
 
@@ -67,16 +73,20 @@ class TopicQos:
     reliable: bool = True
     depth: int = 10
     transient_local: bool = False
+    user_data: str = ""          # USER_DATA QoS (rmw_cyclonedds: "serviceid=…;" on a service's endpoints)
 
     def qos(self):
         from cyclonedds.qos import Policy, Qos
         from cyclonedds.util import duration
 
-        return Qos(Policy.Reliability.Reliable(duration(milliseconds=100)) if self.reliable
-                   else Policy.Reliability.BestEffort,
-                   Policy.History.KeepLast(self.depth),
-                   Policy.Durability.TransientLocal if self.transient_local else Policy.Durability.Volatile,
-                   Policy.DataRepresentation(use_cdrv0_representation=True))
+        policies = [Policy.Reliability.Reliable(duration(milliseconds=100)) if self.reliable
+                    else Policy.Reliability.BestEffort,
+                    Policy.History.KeepLast(self.depth),
+                    Policy.Durability.TransientLocal if self.transient_local else Policy.Durability.Volatile,
+                    Policy.DataRepresentation(use_cdrv0_representation=True)]
+        if self.user_data:
+            policies.append(Policy.Userdata(self.user_data.encode()))
+        return Qos(*policies)
 
 
 DEFAULT_QOS = TopicQos()                                     # rclcpp::QoS(10): SystemDefaultsQoS with depth 10
@@ -94,6 +104,12 @@ def dds_topic_name(topic: str) -> str:
     if not name or any(c.isspace() for c in name):
         raise ValueError(f"ROS 2 topic name '{topic}' is empty or has white space")
     return f"rt/{name}"
+
+
+def dds_service_names(service: str) -> tuple[str, str]:
+    """'/sim/reset' -> ('rq/sim/resetRequest', 'rr/sim/resetReply'): a service's request and reply topics."""
+    name = dds_topic_name(service)[3:]
+    return f"rq/{name}Request", f"rr/{name}Reply"
 
 
 #: this process's Cyclone domains by id: (weak reference to the Domain, its interface). Cyclone allows one
@@ -142,31 +158,49 @@ class Ros2Participant:
         self.participant = DomainParticipant(self.domain_id)
         self._topics: dict[str, object] = {}
         self._entities: list = []
+        self._announcer = None
 
-    def _topic(self, topic: str, msg_type):
+    def _topic(self, topic: str, msg_type, dds_name: str | None = None):
         from cyclonedds.topic import Topic
 
-        name = dds_topic_name(topic)
+        name = dds_name or dds_topic_name(topic)
         t = self._topics.get(name)
         if t is None:
             t = self._topics[name] = Topic(self.participant, name, msg_type)
         return t
 
-    def writer(self, topic: str, msg_type, qos: TopicQos | None = None):
+    def writer(self, topic: str, msg_type, qos: TopicQos | None = None, dds_name: str | None = None):
+        """A writer on ROS 2 topic ``topic`` (DDS ``rt/…``), or on the DDS topic ``dds_name`` as given
+        (a service's ``rq/``/``rr/`` topics, ``ros_discovery_info``)."""
         from cyclonedds.pub import DataWriter
 
-        w = DataWriter(self.participant, self._topic(topic, msg_type), (qos or QOS.get(topic, DEFAULT_QOS)).qos())
+        w = DataWriter(self.participant, self._topic(topic, msg_type, dds_name),
+                       (qos or QOS.get(topic, DEFAULT_QOS)).qos())
         self._entities.append(w)
         return w
 
-    def reader(self, topic: str, msg_type, qos: TopicQos | None = None):
+    def reader(self, topic: str, msg_type, qos: TopicQos | None = None, dds_name: str | None = None):
         from cyclonedds.sub import DataReader
 
-        r = DataReader(self.participant, self._topic(topic, msg_type), (qos or QOS.get(topic, DEFAULT_QOS)).qos())
+        r = DataReader(self.participant, self._topic(topic, msg_type, dds_name),
+                       (qos or QOS.get(topic, DEFAULT_QOS)).qos())
         self._entities.append(r)
         return r
 
+    def announce(self, node: str, distro: str = "humble") -> None:
+        """Publish this participant's readers and writers as ROS node ``/<node>`` on ``ros_discovery_info``
+        (:mod:`.node_graph`: ``ros2 node list`` shows it); call again after adding endpoints."""
+        from cyclonedds.sub import DataReader
+
+        from .node_graph import NodeAnnouncer
+
+        if self._announcer is None:
+            self._announcer = NodeAnnouncer(self.participant, node, distro=distro)
+        self._announcer.announce([e for e in self._entities if isinstance(e, DataReader)],
+                                 [e for e in self._entities if not isinstance(e, DataReader)])
+
     def close(self) -> None:
+        self._announcer = None
         self._entities.clear()
         self._topics.clear()
         self.participant = None
@@ -180,8 +214,19 @@ class Ros2Participant:
 
 
 class DdsEndpoint(Params):
-    """Where a ROS 2 component talks: the DDS domain and network interface (one definition for all)."""
+    """Where a ROS 2 component talks: the DDS domain and network interface, and how it shows in ROS 2's node
+    graph (one definition for all)."""
 
     domain_id: int | None = Field(None, ge=0, le=232, description="DDS domain (default: ROS_DOMAIN_ID, else 0)")
     interface: str = Field(LOOPBACK, description="network interface name or address; 127.0.0.1 (default): "
                                                  "this machine only, no multicast")
+    node_graph: bool = Field(True, description="announce the component's endpoints as a ROS node on "
+                                               "ros_discovery_info (ros2 node list)")
+    ros_distro: Literal["humble", "jazzy"] = Field("humble", description="whose rmw_dds_common Gid layout the "
+                                                   "node-graph announcement uses (Humble: 24 bytes; Iron, "
+                                                   "Jazzy: 16)")
+
+    def announce(self, dds: "Ros2Participant", node: str) -> None:
+        """Announce ``dds``'s endpoints as ROS node ``node`` when ``node_graph`` is on."""
+        if self.node_graph:
+            dds.announce(node, self.ros_distro)

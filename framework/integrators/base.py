@@ -38,6 +38,15 @@ class Integrator:
         self.stats = {"f_evals": 0, "steps": 0}    # per run: bind starts every run
         self._alloc(system.nx, system.ndx)
 
+    def restart(self) -> None:
+        """Forget every memory of past steps (step size, Jacobian, multistep history) after the state was
+        changed between two steps (:mod:`snakesim.framework.state_edit`); the run's stats are kept and
+        ``restarts`` counts the restarts."""
+        stats = self.stats
+        self.bind(self.sys)
+        stats["restarts"] = stats.get("restarts", 0) + 1
+        self.stats = stats
+
     def _alloc(self, nx: int, ndx: int) -> None:
         """Preallocate work arrays."""
 

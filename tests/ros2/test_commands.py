@@ -58,11 +58,22 @@ def _js(names, position=(), velocity=(), stamp=None):
     return M.JointState(header=hdr, name=list(names), position=list(position), velocity=list(velocity))
 
 
-def _traj(names, positions=(), velocities=(), stamp=None, points=1):
+def _traj(names, positions=(), velocities=(), stamp=None, points=1, times=None):
+    """A trajectory of ``points`` equal points (time_from_start 0, 0.1, 0.2 s, … unless ``times``), or, when
+    ``positions`` is a list of lists, one point per inner list."""
     hdr = M.Header(stamp=M.time_msg(stamp) if stamp is not None else M.Time())
-    pts = [M.JointTrajectoryPoint(positions=list(positions), velocities=list(velocities))
-           for _ in range(points)]
+    rows = positions if positions and isinstance(positions[0], (list, tuple)) else [positions] * points
+    vrows = velocities if velocities and isinstance(velocities[0], (list, tuple)) else [velocities] * len(rows)
+    times = times if times is not None else [0.1 * k for k in range(len(rows))]
+    pts = [M.JointTrajectoryPoint(positions=list(p), velocities=list(v), time_from_start=_dur(tf))
+           for p, v, tf in zip(rows, vrows, times)]
     return M.JointTrajectory(header=hdr, joint_names=list(names), points=pts)
+
+
+def _dur(s):
+    ns = int(round(s * 1e9))
+    sec, nsec = divmod(ns, 1_000_000_000)
+    return M.Duration(sec=sec, nanosec=nsec)
 
 
 def test_valid_commands_applied_and_held(rig, robot):
@@ -76,8 +87,9 @@ def test_valid_commands_applied_and_held(rig, robot):
     out = take(0.5, 1)
     assert out["applied"][0] == 1 and out["rejected"][0] == 0
     assert out["setpoint"][j.index(bend)] == 0.3 and out["rate"][j.index(bend)] == 0.1
-    publish("/joint_commands", _traj([screw], velocities=[2.0], points=3))      # screws: speeds; later points ignored
-    out = take(0.6, 2)
+    publish("/joint_commands", _traj([screw], velocities=[2.0], points=3))      # screws: speeds
+    take(0.6, 2)
+    out = take(0.9, 2)                                                            # past its last point
     assert out["setpoint"][j.index(screw)] == 2.0 and out["rate"][j.index(screw)] == 0.0
     assert out["setpoint"][j.index(bend)] == 0.3                                  # held (zero-order hold)
     publish("/enable_gravity", M.Bool(data=False))
@@ -100,6 +112,12 @@ MALFORMED = [
     ("stale", "/joint_command", lambda j: _js([j[0]], position=[0.1], stamp=0.2), "header.stamp = 0.2 s is stale"),
     ("out of range", "/joint_command", lambda j: _js([j[0]], position=[100.0]), "position[0] (%s) = 100 is out of range"),
     ("empty trajectory", "/joint_commands", lambda j: _traj([j[0]], points=0), "points is empty"),
+    ("time not increasing", "/joint_commands", lambda j: _traj([j[0]], [[0.1], [0.2], [0.3]], times=[0.0, 0.5, 0.5]),
+     "points[2].time_from_start = 0.5 s is not after points[1].time_from_start = 0.5 s"),
+    ("negative time", "/joint_commands", lambda j: _traj([j[0]], [[0.1]], times=[-1.0]),
+     "points[0].time_from_start = -1 s is negative"),
+    ("later point NaN", "/joint_commands", lambda j: _traj([j[0]], [[0.1], [math.nan]]),
+     "points[1].positions[0] (%s) = nan is not finite"),
     ("repeated joint", "/joint_command", lambda j: _js([j[0], j[0]], position=[0.1, 0.2]), "name[1] = '%s' appears twice"),
 ]
 
@@ -154,3 +172,64 @@ def test_attach_rule_schedule_kept_unless_takeover(dds_domain):
             ("robot.joint_q", "ros2_commands.q"), ("ros2_commands.gravity", "robot.gravity")} <= set(pairs)
     assert r.components["ros2_commands"].params["joints"] is True
     assert sum(d == "pid.setpoint" for _, d, _ in r.connections) == 1
+
+
+def test_trajectory_points_followed_in_time_with_linear_interpolation(rig, robot):
+    """Unstamped: times count from the tick that took it (t = 1.0 s). Before the first point the joint keeps
+    its set-point; between points it is interpolated; after the last it holds."""
+    h, publish, take = rig
+    j = list(robot.joints)
+    bend, twist = j.index("bend_00"), j.index("twist_00")
+    publish("/joint_command", _js(["bend_00"], position=[-0.4]))
+    take(0.99, 1)
+    publish("/joint_commands", _traj(["bend_00", "twist_00"], [[0.1, 0.0], [0.5, 0.2], [-0.2, 0.2]],
+                                     velocities=[[0.0, 0.0], [1.0, 0.5], [0.0, 0.0]], times=[0.1, 0.3, 0.5]))
+    out = take(1.0, 2)
+    assert out["applied"][0] == 2 and out["setpoint"][bend] == -0.4            # before T0 = 1.1 s: unchanged
+    expect = {1.1: (0.1, 0.0, 0.0), 1.2: (0.3, 0.1, 0.5), 1.25: (0.4, 0.15, 0.75), 1.3: (0.5, 0.2, 1.0),
+              1.4: (0.15, 0.2, 0.5), 1.5: (-0.2, 0.2, 0.0), 1.7: (-0.2, 0.2, 0.0)}
+    for t, (q_bend, q_twist, rate_bend) in expect.items():
+        out = h.outputs(t)
+        assert out["setpoint"][bend] == pytest.approx(q_bend, abs=1e-12), t
+        assert out["setpoint"][twist] == pytest.approx(q_twist, abs=1e-12), t
+        assert out["rate"][bend] == pytest.approx(rate_bend, abs=1e-12), t
+    assert h.u.cache.trajectories == []                                         # over: held, dropped
+
+
+def test_stamped_trajectory_times_from_its_stamp_and_later_commands_take_joints_over(rig, robot):
+    h, publish, take = rig
+    j = list(robot.joints)
+    bend, twist = j.index("bend_00"), j.index("twist_00")
+    publish("/joint_commands", _traj(["bend_00", "twist_00"], [[0.0, 0.0], [0.4, -0.4]], times=[0.0, 0.4],
+                                     stamp=2.0))
+    take(2.05, 1)                                   # taken at 2.05 s, but its times count from the stamp
+    out = h.outputs(2.1)
+    assert out["setpoint"][bend] == pytest.approx(0.1, abs=1e-12)
+    assert out["setpoint"][twist] == pytest.approx(-0.1, abs=1e-12)
+    publish("/joint_command", _js(["twist_00"], position=[0.25]))                # takes twist over
+    out = take(2.2, 2)
+    assert out["setpoint"][bend] == pytest.approx(0.2, abs=1e-12) and out["setpoint"][twist] == 0.25
+    out = h.outputs(2.3)
+    assert out["setpoint"][bend] == pytest.approx(0.3, abs=1e-12) and out["setpoint"][twist] == 0.25
+
+
+def test_the_same_reason_is_logged_at_most_once_per_period_with_a_count(rig, robot, caplog):
+    from snakesim.components.ros2.rejections import RejectionLog
+
+    h, publish, take = rig
+    h.u.cache.log = RejectionLog("cmd", every=0.5)
+    j = [n for n, k in zip(robot.joints, robot.joint_kinds) if k != "screw"]
+    with caplog.at_level(logging.WARNING, logger="snakesim.ros2"):
+        for k in range(5):
+            publish("/joint_command", _js([j[0]], position=[math.nan]))
+        take(1.0, 5)
+        time.sleep(0.6)
+        publish("/joint_command", _js([j[0]], position=[math.nan]))
+        publish("/joint_command", _js(["elbow_9"], position=[0.1]))                # another reason
+        out = take(1.0, 7)
+    assert out["rejected"][0] == 7 and out["applied"][0] == 0
+    lines = [r.getMessage() for r in caplog.records if r.name == "snakesim.ros2"]
+    assert len(lines) == 3, lines
+    assert "is not finite" in lines[0] and "more" not in lines[0]
+    assert "is not finite" in lines[1] and "(and 4 more for this reason since the last line)" in lines[1]
+    assert "'elbow_9' is not a joint" in lines[2]

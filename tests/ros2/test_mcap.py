@@ -18,7 +18,8 @@ pytest.importorskip("mcap")
 pytest.importorskip("mcap_ros2")
 
 TYPES = {"/clock": "rosgraph_msgs/msg/Clock", "/joint_states": "sensor_msgs/msg/JointState",
-         "/tf": "tf2_msgs/msg/TFMessage", "/robot_description": "std_msgs/msg/String"}
+         "/tf": "tf2_msgs/msg/TFMessage", "/robot_description": "std_msgs/msg/String",
+         "/tf_static": "tf2_msgs/msg/TFMessage", "/sim/real_time_factor": "std_msgs/msg/Float64"}
 
 
 def _read(path, cut_short=False):
@@ -52,7 +53,8 @@ def test_recording_decodes_with_the_published_topics_types_counts_and_bytes(dds_
     reg = default_registry()
     resolved = resolve("robot-zero-g", search_path=reg.assembly_paths(), overrides=["robot.modules=2"],
                        sim_overrides={"duration": 0.3})
-    pub = attach_ros2(resolved, reg, params={"domain_id": dds_domain(), "rates": {"tf": 25.0}})
+    pub = attach_ros2(resolved, reg, params={"domain_id": dds_domain(),
+                                             "rates": {"tf": 25.0, "real_time_factor": 20.0}})
     rec = attach_mcap(resolved, str(tmp_path / "run.mcap"))
     s = Session(resolved, reg)
     s.run()
@@ -61,9 +63,22 @@ def test_recording_decodes_with_the_published_topics_types_counts_and_bytes(dds_
     got = _read(tmp_path / "run.mcap")
     assert {t: {m[0] for m in msgs} for t, msgs in got.items()} == {t: {ty} for t, ty in TYPES.items()}
     topics = {"clock": "/clock", "joint_states": "/joint_states", "tf": "/tf"}
-    assert {topics[k]: n for k, n in prun.published.items()} == {t: len(got[t]) for t in topics.values()}
+    assert {topics[k]: n for k, n in prun.published.items() if k in topics} == \
+        {t: len(got[t]) for t in topics.values()}
     assert len(got["/robot_description"]) == 1
     assert got["/robot_description"][0][1].data == s.plan.components[pub].robot.urdf
+    # /tf_static: once, at the first tick, the publisher's latched message byte for byte
+    assert len(got["/tf_static"]) == 1 and got["/tf_static"][0][3] == 0
+    static = s.plan.components[pub].static_message(0.0)
+    assert len(static.transforms) > 0
+    raw = static.serialize()
+    assert got["/tf_static"][0][2] == raw.ljust((len(raw) + 3) & ~3, b"\0")
+    assert [tr.child_frame_id for tr in got["/tf_static"][0][1].transforms] == \
+        [tr.child_frame_id for tr in static.transforms]
+    # /sim/real_time_factor: as many as published (from the second 20 Hz window on), positive
+    rtf = got["/sim/real_time_factor"]
+    assert len(rtf) == prun.published["real_time_factor"] == 5
+    assert all(m[1].data > 0 for m in rtf) and [m[3] for m in rtf] == [50_000_000 * k for k in range(1, 6)]
     # the last message of each topic: the very bytes the publisher last handed to DDS
     for key, topic in topics.items():
         assert got[topic][-1][2] == bytes(prun.templates[key][2].buf), topic

@@ -47,6 +47,8 @@ def _filled(cls, rng, depth=0):
                 kw[f.name] = [_filled(inner, rng, depth + 1) for _ in range(3)]
             elif inner is str:
                 kw[f.name] = ["a", "bc", "def"]
+            elif getattr(inner, "__origin__", None) is int:        # e.g. uint8[]
+                kw[f.name] = [int(x) for x in rng.integers(0, 100, size=3)]
             else:
                 kw[f.name] = [float(x) for x in rng.normal(size=3)]
     return cls(**kw)
@@ -108,3 +110,43 @@ def test_patched_template_is_what_rosbags_decodes():
     np.testing.assert_array_equal(d.position, q)
     np.testing.assert_array_equal(d.velocity, v)
     assert len(d.effort) == 0
+
+
+SERVICES = sorted(M.SRV_TEXT)
+
+
+@pytest.mark.parametrize("srv", SERVICES)
+@pytest.mark.parametrize("part", ["Request", "Response"])
+def test_service_types_carry_rmw_cyclonedds_request_header_then_the_std_srvs_fields(srv, part):
+    """rmw_cyclonedds' wire form: the 8-byte client guid and 8-byte sequence number, then the message's fields
+    as plain CDR; the fields are std_srvs' (.srv text), and the bytes after the header decode with rosbags."""
+    req, rsp = M.service_types(srv)
+    cls = req if part == "Request" else rsp
+    pkg, _, typ = srv.split("/")
+    assert cls.__idl_typename__ == f"{pkg}::srv::dds_::{typ}_{part}_"
+    ros_name = f"{srv}_{part}"
+    names = [f.name for f in dataclasses.fields(cls)]
+    assert names[:2] == ["header_guid", "header_seq"]
+    assert names[2:] == _ros_fields(M.typestore(), ros_name)
+    body = {f.name: getattr(_filled(cls, np.random.default_rng(3)), f.name) for f in dataclasses.fields(cls)[2:]}
+    msg = cls(header_guid=0x0123456789ABCDEF, header_seq=-7 if part == "Response" else 42, **body)
+    raw = msg.serialize()
+    assert raw[:4] == b"\x00\x01\x00\x00"
+    assert int.from_bytes(raw[4:12], "little") == 0x0123456789ABCDEF
+    assert int.from_bytes(raw[12:20], "little", signed=True) == msg.header_seq
+    # the 16-byte header keeps 8-byte alignment: the rest is exactly the ROS message's CDR body
+    decoded = M.typestore().deserialize_cdr(raw[:4] + raw[20:], ros_name)
+    for name, value in body.items():
+        assert getattr(decoded, name) == value, name
+    assert cls.deserialize(raw) == msg
+
+
+def test_service_text_is_std_srvs():
+    """The derived definitions, as rosbags generates them back (what an MCAP schema would carry)."""
+    assert M.typestore().generate_msgdef("std_srvs/srv/SetBool_Request", ros_version=2)[0] == "bool data\n"
+    assert M.typestore().generate_msgdef("std_srvs/srv/Trigger_Response", ros_version=2)[0] == \
+        "bool success\nstring message\n"
+    assert [f for f, _ in M.typestore().fielddefs["std_srvs/srv/Empty_Request"][1]] == \
+        ["structure_needs_at_least_one_member"]
+    with pytest.raises(KeyError, match="not defined here"):
+        M.service_types("std_srvs/srv/Nope")

@@ -164,5 +164,21 @@ def test_cli_options_add_the_gate(tmp_path):
     attach_ros2(resolved, reg, params={"domain_id": 9})
     name = attach_sim_control(resolved, {"lockstep": True})
     spec = resolved.components[name]
-    assert spec.type == "ros2_sim_control" and spec.params == {"domain_id": 9, "lockstep": True}
+    assert spec.type == "ros2_sim_control" and spec.params == {"domain_id": 9, "lockstep": True,
+                                                               "world_frame": "world", "robot_state": "robot"}
+    assert spec.uses == {"robot": "robot"}                 # placement: the multibody's state and robot
     assert spec.rate == pytest.approx(100.0)
+
+
+def test_no_multibody_no_placement_topics(tmp_path):
+    """A scene without a multibody robot: the gate offers pause, step and reset, not placement."""
+    from snakesim.components.ros2.attach import attach_sim_control
+    from snakesim.framework.assembly import resolve
+
+    reg = default_registry()
+    p = tmp_path / "scene.yaml"
+    p.write_text(SCENE % {"duration": 0.1, "domain": 9, "timeout": 1.0, "extra": "lockstep: false"})
+    resolved = resolve(str(p), search_path=reg.assembly_paths())
+    del resolved.components["ctl"]
+    spec = resolved.components[attach_sim_control(resolved, {"domain_id": 9}, reg)]
+    assert "robot_state" not in spec.params and not spec.uses

@@ -1,0 +1,56 @@
+"""ROS 2 node-graph presence: `snakesim run --ros2` announces its nodes on ros_discovery_info as rmw_cyclonedds
+does, seen by a separate process (graph_listener.py) that reads it with Humble's rmw_dds_common definition and
+matches the gids against DDS's own discovery of the writers."""
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+HERE = Path(__file__).parent
+
+
+def test_ros2_node_list_would_show_snakesim_with_its_topics(dds_domain):
+    domain = dds_domain()
+    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+    env.pop("CYCLONEDDS_URI", None)
+    listener = subprocess.Popen([sys.executable, str(HERE / "graph_listener.py"), str(domain), "30"],
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    try:
+        assert json.loads(listener.stdout.readline()) == {"ready": True}, listener.stderr.read()
+        exe = Path(sys.executable).with_name("snakesim")
+        run = subprocess.run([str(exe), "run", "robot-zero-g", "--set", "robot.modules=2", "--duration", "2.0",
+                              "--realtime", "--ros2-domain", str(domain), "--quiet"],
+                             capture_output=True, text=True, timeout=90, env=env)
+        assert run.returncode == 0, run.stderr[-3000:]
+        out, err = listener.communicate(timeout=40)
+    finally:
+        if listener.poll() is None:
+            listener.kill()
+            listener.wait()
+    got = json.loads(out.strip().splitlines()[-1])
+    nodes = {n["name"]: n for n in got["nodes"]}
+    assert {"snakesim", "snakesim_sim_control"} <= set(nodes), sorted(nodes)
+    node = nodes["snakesim"]
+    assert node["namespace"] == "/"
+    pubs = {p["key"]: p for p in got["publications"]}
+    # Humble's Gid: the 16-byte DDS GUID, then 8 zero bytes
+    assert all(len(g) == 48 and g.endswith("00" * 8) for g in node["writers"] + [node["participant"]])
+    topics = {pubs[g[:32]]["topic"] for g in node["writers"] if g[:32] in pubs}
+    assert {"rt/clock", "rt/joint_states", "rt/tf", "rt/robot_description"} <= topics, sorted(topics)
+    # the node's participant is the one DDS says those writers belong to
+    assert {pubs[g[:32]]["participant"] for g in node["writers"] if g[:32] in pubs} == {node["participant"][:32]}
+    # the gate's node lists its readers (/sim/pause …) and its service endpoints
+    gate = nodes["snakesim_sim_control"]
+    assert gate["readers"] and any(pubs.get(g[:32], {}).get("topic") == "rr/sim/resetReply" for g in gate["writers"])
+
+
+def test_jazzy_layout_has_16_byte_gids():
+    from snakesim.components.ros2.node_graph import discovery_type
+
+    assert len(discovery_type("jazzy")().gid.data) == 16 and len(discovery_type("humble")().gid.data) == 24
+    with pytest.raises(KeyError):
+        discovery_type("rolling")
