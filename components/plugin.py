@@ -27,7 +27,7 @@ from .signals.sources import Constant, Sine, Step
 from .sensors import ForceTorqueSensors, Imu
 from .tethers import Tethers, WrenchSum
 from .viz import RerunSink
-from .ros2 import Ros2Commands, Ros2Publisher, Ros2SimControl, Ros2TetherCommands
+from .ros2 import Ros2Commands, Ros2Publisher, Ros2SensorBridge, Ros2SimControl, Ros2TetherCommands
 from .ros2.cli import ros2_run_options  # noqa: F401  (hookimpl: --ros2)
 from .ros2.mcap_cli import ros2_mcap_run_options  # noqa: F401  (hookimpl: --ros2-mcap)
 from .ros2.mcap_recorder import Ros2McapRecorder
@@ -36,7 +36,7 @@ from .viz.cli import viz_add_commands, viz_run_options  # noqa: F401  (hookimpls
 BUILTIN = (Constant, Step, Sine, Gain, Sum, ZeroOrderHold, Pendulum, ViscousDamper, PointMass, SpringDamper,
            PointContact, HullContact, TerrainSource, Multibody, ScrewSdfContact, ScrewDrive,
            JointPid, JointSpringDamper, JointSetpoints, SerpenoidGait, CsvTrajectory, Schedule, ForceTorqueSensors,
-           Imu, Tethers, WrenchSum, MobilityMonitor, RerunSink, PlanarPose, ScrewSchedule, Ros2Publisher, Ros2Commands,
+           Imu, Tethers, WrenchSum, MobilityMonitor, RerunSink, PlanarPose, ScrewSchedule, Ros2Publisher, Ros2Commands, Ros2SensorBridge,
            Ros2SimControl, Ros2McapRecorder, Ros2TetherCommands,
            *PLACEMENT, *PERCEPTION)
 

@@ -3,7 +3,7 @@ into hits, and hits into pixels, without a Python or NumPy pass per quantity.
 
     rays_to_world   sensor-frame rays to the world (float64), and Embree's float32 copies
                     starting at min_range
-    nearest_hits    per ray, the nearer of the terrain's and the robot's Embree hits: range,
+    nearest_hits    per ray, the nearest of the terrain's and the robot's Embree hits: range,
                     unit normal facing the ray, albedo, colour, link row, material, and
                     whether the hit is on a face that only approximates a curved terrain
     develop         per hit pixel, Lambertian shading (.reflectance) with a headlamp or a sun,
@@ -34,21 +34,24 @@ def rays_to_world(o_l, d_l, R, p, min_range, o_w, d_w, start32, d32):
 
 @njit(cache=True, nogil=True)
 def nearest_hits(d, min_range, max_range,
-                 geom_t, t_t, prim_t, ng_t, albedo_t, color_t, refine_t, material_t,
-                 geom_r, t_r, prim_r, ng_r, albedo_r, color_r, link_r,
+                 geom_a, t_a, prim_a, ng_a, robot_in_a,
+                 geom_b, t_b, prim_b, ng_b,
+                 albedo_t, color_t, refine_t, material_t, albedo_r, color_r, link_r,
                  distance, normal, albedo, color, link, material, refine):
-    """Fill the output arrays (n rays) from the two scenes' raw hits. A scene with no rays
-    (geom arrays of length 0) is absent. Distances are from the rays' start plus min_range;
-    hits beyond max_range are misses (inf)."""
+    """Fill the output arrays (n rays) from Embree's raw hits in one or two scenes: scene A holds
+    the terrain as geometry 0 and, when ``robot_in_a``, the robot as geometry 1; scene B (raw
+    arrays of length n, else length 0: absent) holds the robot alone. Distances are from the
+    rays' start plus min_range; hits beyond max_range are misses (inf)."""
     n = d.shape[0]
-    has_t, has_r = geom_t.shape[0] == n, geom_r.shape[0] == n
+    has_a, has_b = geom_a.shape[0] == n, geom_b.shape[0] == n
     for i in range(n):
         best = math.inf
-        src = 0
-        if has_t and geom_t[i] != MISS:
-            best, src = t_t[i], 1
-        if has_r and geom_r[i] != MISS and t_r[i] < best:
-            best, src = t_r[i], 2
+        src = 0             # 0 none, 1 terrain (A), 2 robot in A, 3 robot in B
+        if has_a and geom_a[i] != MISS:
+            best = t_a[i]
+            src = 2 if (robot_in_a and geom_a[i] == 1) else 1
+        if has_b and geom_b[i] != MISS and t_b[i] < best:
+            best, src = t_b[i], 3
         refine[i] = False
         material[i] = MISS
         link[i] = MISS
@@ -57,16 +60,20 @@ def nearest_hits(d, min_range, max_range,
             continue
         distance[i] = best + min_range
         if src == 1:
-            f = prim_t[i]
-            nx, ny, nz = ng_t[i, 0], ng_t[i, 1], ng_t[i, 2]
+            f = prim_a[i]
+            nx, ny, nz = ng_a[i, 0], ng_a[i, 1], ng_a[i, 2]
             albedo[i] = albedo_t[f]
             for c in range(3):
                 color[i, c] = color_t[f, c]
             material[i] = material_t[f]
             refine[i] = refine_t[f]
         else:
-            f = prim_r[i]
-            nx, ny, nz = ng_r[i, 0], ng_r[i, 1], ng_r[i, 2]
+            if src == 2:
+                f = prim_a[i]
+                nx, ny, nz = ng_a[i, 0], ng_a[i, 1], ng_a[i, 2]
+            else:
+                f = prim_b[i]
+                nx, ny, nz = ng_b[i, 0], ng_b[i, 1], ng_b[i, 2]
             albedo[i] = albedo_r[f]
             for c in range(3):
                 color[i, c] = color_r[f, c]

@@ -3,16 +3,18 @@ the terrain's own distance field for the exact hit.
 
     hits = world.cast(origins, directions, max_range, min_range=0)
 
-origins (n, 3) m and unit directions (n, 3), world frame. The terrain is one static
-Embree scene, built once per run; the robot is a second scene of its posed link meshes,
-built at most once per instant, on the first cast (every sensor sampled at that
-instant shares it). A ray's hit is the nearer of the two.
+origins (n, 3) m and unit directions (n, 3), world frame (``cast_from`` takes them in a
+sensor frame and its pose). The robot's posed link meshes go into an Embree scene at most
+once per instant, on the first cast (every sensor sampled at that instant shares it). A
+terrain of up to MERGE_FACES faces goes into that same scene (one cast per ray); a larger
+one is its own Embree scene, built once per run, and a ray's hit is the nearer of the two.
 
 Embree works in float32 (≈1e-7 relative: 1 µm at 10 m). Terrain hits on an analytic
 kind are then refined onto the true surface in float64 by Newton's method on the signed
 distance along the ray, f(t) = d(o + t·r), f'(t) = n·r, so a plane, wall or tube
 returns its exact range, not its tessellation's (two iterations; a step larger than
-``refine_limit`` keeps the mesh hit).
+``refine_limit`` keeps the mesh hit). Only hits on faces that approximate a curve are
+refined (``TerrainSurfaces.refine``): a plane's faces are the plane.
 
 Results (``RayHits``): ``distance`` (n,) m along the ray, inf where nothing is hit
 within [min_range, max_range]; ``normal`` (n, 3) unit, world, facing the ray;
@@ -34,6 +36,9 @@ from .textures import texture_factor, texture_table
 _NO_HIT = -1
 REFINE_ITERATIONS = 2
 GRAZING = 1e-3          # |n·r| below this: a Newton step is ill-conditioned; keep the mesh hit
+#: terrains up to this many faces are rebuilt with the robot each instant into one Embree scene
+#: (one cast per ray instead of two); larger ones stay in their own scene, built once
+MERGE_FACES = 200_000
 
 
 @dataclasses.dataclass
@@ -49,15 +54,17 @@ class RayHits:
         return np.isfinite(self.distance)
 
 
-def embree_scene(vertices: np.ndarray, faces: np.ndarray):
-    """An Embree scene of one triangle mesh (None for an empty mesh)."""
-    if len(faces) == 0:
+def embree_scene(*meshes):
+    """An Embree scene of triangle meshes given as (vertices, faces) pairs; geometry k is the k-th
+    (None when every mesh is empty)."""
+    if not any(len(f) for _, f in meshes):
         return None
     from embreex import mesh_construction, rtcore_scene
 
     scene = rtcore_scene.EmbreeScene()
-    mesh_construction.TriangleMesh(scene, np.ascontiguousarray(vertices, dtype=np.float32),
-                                   np.ascontiguousarray(faces, dtype=np.int32))
+    for vertices, faces in meshes:
+        mesh_construction.TriangleMesh(scene, np.ascontiguousarray(vertices, dtype=np.float32),
+                                       np.ascontiguousarray(faces, dtype=np.int32))
     return scene
 
 
@@ -75,14 +82,13 @@ class StaticTerrainScene:
 
     def __init__(self, surfaces: TerrainSurfaces, refine_limit: float = 0.5):
         self.surfaces = surfaces
-        self.scene = embree_scene(surfaces.vertices, surfaces.faces)
+        self.scene = embree_scene((surfaces.vertices, surfaces.faces)) if len(surfaces.faces) else None
+        # a small terrain is rebuilt with the robot into one scene per instant: one cast, not two
+        self.merge = 0 < len(surfaces.faces) <= MERGE_FACES
         self.refine_limit = float(refine_limit)
         self._albedo, self._color = optical_table(surfaces.terrain.materials)
         self._texture = texture_table(surfaces.terrain.materials)
         self.textured = bool((self._texture[:, 0] != 0).any())
-
-    def raw(self, o32, d32, far32):
-        return _NONE if self.scene is None else _intersect(self.scene, o32, d32, far32)
 
     def finish(self, o, d, out: RayHits, material: np.ndarray, refine: np.ndarray) -> None:
         """Refine the hits on curved faces onto the exact surface; apply material textures."""
@@ -112,8 +118,8 @@ class StaticTerrainScene:
             t = np.where(ok, t - q.distance / np.where(ok, slope, 1.0), t)
         ok &= np.abs(t - t0) < self.refine_limit
         t = np.where(ok, t, t0)
-        q = terrain.query(o + t[:, None] * d)
-        normal = q.normal * np.where(np.einsum("ij,ij->i", q.normal, d) > 0, -1.0, 1.0)[:, None]
+        # normal and material from the last query, one Newton step before t (≈ κ·sag² away: µrad)
+        normal = q.normal * np.where(slope > 0, -1.0, 1.0)[:, None]
         return t, normal, q.material, ok
 
 
@@ -130,7 +136,7 @@ class SensorWorld:
         self.robot = robot
         self.link_poses = link_poses
         self._rotations = None
-        self._robot_scene = None
+        self._scenes = None
 
     @property
     def rotations(self) -> np.ndarray:
@@ -143,11 +149,21 @@ class SensorWorld:
         """(R (3, 3), p (3,)) of link ``row`` in the world."""
         return self.rotations[row], self.link_poses[row, :3]
 
-    def _robot(self):
-        if self._robot_scene is None and self.robot is not None and len(self.robot.faces):
-            posed = self.robot.posed(self.rotations, self.link_poses[:, :3])
-            self._robot_scene = embree_scene(posed, self.robot.faces)
-        return self._robot_scene
+    def scenes(self):
+        """(scene A, robot in A, scene B) for this instant: A the terrain (with the robot when the
+        terrain is small enough to rebuild), B the robot alone otherwise; built on first use."""
+        if self._scenes is None:
+            ter, rob = self.terrain, self.robot
+            robot = None
+            if rob is not None and len(rob.faces):
+                robot = (rob.posed(self.rotations, self.link_poses[:, :3]), rob.faces)
+            if ter is not None and ter.merge and robot is not None:
+                s = ter.surfaces
+                self._scenes = (embree_scene((s.vertices, s.faces), robot), True, None)
+            else:
+                self._scenes = (ter.scene if ter is not None else None, False,
+                                embree_scene(robot) if robot is not None else None)
+        return self._scenes
 
     def cast(self, origins, directions, max_range: float, min_range: float = 0.0) -> RayHits:
         """Nearest hit of each world ray (origins, unit directions (n, 3)) within
@@ -169,19 +185,14 @@ class SensorWorld:
         refine = np.empty(n, dtype=np.bool_)
         far32 = np.full(n, max_range - min_range, dtype=np.float32)
         ter = self.terrain
-        if ter is not None:
-            raw_t = ter.raw(start32, d32, far32)
-            s = ter.surfaces
-            tables_t = (s.albedo, s.color, s.refine, s.material)
-        else:
-            raw_t, tables_t = _NONE, _EMPTY_TERRAIN
-        scene = self._robot() if n else None
-        if scene is not None:
-            raw_r = _intersect(scene, start32, d32, far32)
-            tables_r = (self.robot.albedo, self.robot.color, self.robot.face_link)
-        else:
-            raw_r, tables_r = _NONE, _EMPTY_ROBOT
-        nearest_hits(d_w, float(min_range), float(max_range), *raw_t, *tables_t, *raw_r, *tables_r,
+        a, robot_in_a, b = self.scenes() if n else (None, False, None)
+        raw_a = _intersect(a, start32, d32, far32) if a is not None else _NONE
+        raw_b = _intersect(b, start32, d32, far32) if b is not None else _NONE
+        s = ter.surfaces if ter is not None else None
+        tables_t = (s.albedo, s.color, s.refine, s.material) if s is not None else _EMPTY_TERRAIN
+        rob = self.robot
+        tables_r = (rob.albedo, rob.color, rob.face_link) if rob is not None else _EMPTY_ROBOT
+        nearest_hits(d_w, float(min_range), float(max_range), *raw_a, robot_in_a, *raw_b, *tables_t, *tables_r,
                      out.distance, out.normal, out.albedo, out.color, out.link, material, refine)
         if ter is not None and (refine.any() or ter.textured):
             ter.finish(o_w, d_w, out, material, refine)      # distances are from the origins

@@ -17,7 +17,8 @@
 
 from .commands import Ros2Commands
 from .publisher import Ros2Publisher
+from .sensor_bridge import Ros2SensorBridge
 from .sim_control import Ros2SimControl
 from .tether_commands import Ros2TetherCommands
 
-__all__ = ["Ros2Commands", "Ros2Publisher", "Ros2SimControl", "Ros2TetherCommands"]
+__all__ = ["Ros2Commands", "Ros2Publisher", "Ros2SensorBridge", "Ros2SimControl", "Ros2TetherCommands"]

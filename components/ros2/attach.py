@@ -28,6 +28,11 @@ publisher: /sim/pause, /sim/step, /sim/reset (topics and services); when the rob
 multibody (class Multibody) its name is the gate's ``robot_state`` and the gate uses its robot, so
 /sim/set_pose and /sim/set_joint_positions are accepted; its ``world_frame`` is the publisher's.
 
+The sensor bridge (``ros2_sensor_bridge``, :func:`attach_sensor_bridge`), added when the scene has
+perception sensors: every output of port role LIDAR_SCAN or CAMERA_FRAME, one topic base each
+(/comp, or /comp/port when the component has several such ports: a stereo pair's left and right),
+at the fastest of those sensors' rates.
+
 The tether command source (``ros2_tether_commands``, :func:`attach_tether_commands`), added when the
 scene has a ``tethers`` component (class Tethers) whose ``attached`` input it leaves unconnected:
 ``ros2_tether_commands.attached -> tethers.attached`` (/tethers/attached).
@@ -83,6 +88,7 @@ def attach_ros2(resolved: Resolved, registry=None, params: dict | None = None) -
     both = {**{k: pub[k] for k in SHARED if k in pub}, **shared}
     attach_commands(resolved, registry, both)
     attach_tether_commands(resolved, registry, both)
+    attach_sensor_bridge(resolved, registry, both)
     attach_sim_control(resolved, {**both, "world_frame": pub.get("world_frame", "world")}, registry)
     return name
 
@@ -149,6 +155,42 @@ def attach_tether_commands(resolved: Resolved, registry=None, params: dict | Non
         resolved.where[name] = "--ros2"
         return name
     return None
+
+
+SENSOR_BRIDGE = "ros2_sensor_bridge"
+
+
+def attach_sensor_bridge(resolved: Resolved, registry=None, params: dict | None = None) -> str | None:
+    """Add (once) a ``ros2_sensor_bridge`` publishing every LIDAR_SCAN and CAMERA_FRAME output (see the
+    module docstring); update its params. Its name, or None when the scene has no such output."""
+    from snakesim.components.port_roles import CAMERA_FRAME, LIDAR_SCAN
+    from snakesim.framework.registry import default_registry
+
+    existing = _existing(resolved, SENSOR_BRIDGE)
+    if existing is not None:
+        spec = resolved.components[existing]
+        resolved.components[existing] = spec.model_copy(update={"params": {**spec.params, **(params or {})}})
+        return existing
+    refs, bases, rates = [], [], []
+    for comp, spec, cls in (registry or default_registry()).classes_in(resolved):
+        ports = [p for p, o in cls.outputs.items() if o.role in (LIDAR_SCAN, CAMERA_FRAME)]
+        for port in ports:
+            refs.append(f"{comp}.{port}")
+            bases.append(f"/{comp}" if len(ports) == 1 else f"/{comp}/{port}")
+        if ports and spec.rate:
+            rates.append(spec.rate)
+    if not refs:
+        return None
+    name, k = SENSOR_BRIDGE, 1
+    while name in resolved.components:
+        name, k = f"{SENSOR_BRIDGE}_{k}", k + 1
+    fastest = max(rates, default=COMMANDS_RATE)
+    rate = 1.0 / (nearest_period(fastest, resolved.sim.dt) * resolved.sim.dt)
+    resolved.components[name] = ComponentSpec(type=SENSOR_BRIDGE, rate=rate,
+                                              params={**(params or {}), "sensors": refs, "bases": bases})
+    resolved.connections.extend((ref, f"{name}.sensor{i}", "--ros2") for i, ref in enumerate(refs))
+    resolved.where[name] = "--ros2"
+    return name
 
 
 def _attach_publisher(resolved: Resolved, registry=None, params: dict | None = None) -> str:

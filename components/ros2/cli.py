@@ -115,10 +115,11 @@ def _sim(**params):
 
 @hookimpl(specname="snakesim_run_options")
 def ros2_run_options():
-    return [
+    options = [
         (click.Option(["--ros2"], is_flag=True, default=None,
                       help="Publish the robot on ROS 2 (Cyclone DDS; /clock, /joint_states, /tf, /tf_static, "
-                           "/robot_description, /sim/real_time_factor, /imu and /fts/* when present; "
+                           "/robot_description, /sim/real_time_factor, /imu, /fts/*, lidar PointCloud2 and camera Image/CameraInfo "
+                           "when present; "
                            "/sim/pause, /sim/step, /sim/reset, /sim/set_pose, /sim/set_joint_positions, "
                            "/tethers/attached and the /sim/reset and /sim/pause services accepted); loopback only "
                            "by default."), _ros2),
@@ -146,3 +147,7 @@ def ros2_run_options():
                       help="Stop the run after S wall seconds held with no ROS 2 request (0: wait for ever); "
                            "implies --ros2."), _sim(hold_timeout=None)),
     ]
+    # the interface publishes what it finds (sensors --lidar/--stereo add): applied after them
+    for _, apply in options:
+        apply.adds_sink = True
+    return options

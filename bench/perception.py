@@ -1,0 +1,218 @@
+"""Perception cost: rays per second of the lidar and the cameras against raw Embree on the same
+geometry, frame times, and the default scene's real-time factor with the sensors on and off.
+
+rays      at each scene's initial state (the robot as the scene starts it, the terrain as the
+          sensor_scene builds it), the same world rays cast (a) by raw ``embreex``: one Embree
+          scene holding the terrain mesh and the posed robot mesh, ``run(..., output=1)``, and
+          (b) by the sensor: ``Lidar.sample`` (64x1024, spinning-64) and ``StereoCamera``'s
+          render of both eyes (640x480 pinhole, sun without shadows): everything from the
+          sensor pose to the finished scan or images. Both with the instant's scene built (the
+          build, shared by every sensor of an instant: the posed robot, and a small terrain
+          with it, is timed on its own). Best of
+          ``--repeats``. pipeline/raw rays per second is the pipeline's efficiency (target ≥ 0.7).
+frames    the same sensors' full frame time, robot scene build included, in the obstacle course
+          and the moulin.
+rtf       the default scene (surface-screw-traverse, its dt and integrator) with a 64x1024 lidar
+          at 10 Hz and a 640x480 stereo pair at 5 Hz (``--lidar spinning-64 --stereo 640x480``)
+          and without, alternately in this process, best of ``--repeats`` after a warm-up; the
+          ratio (goal: the sensors on at >= 1x real time on this 2-core machine).
+
+    python bench/perception.py [--repeats 3] [--duration 2] [--json FILE]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import sys
+import time
+
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import numpy as np  # noqa: E402
+
+from snakesim.components.perception import SensorScene  # noqa: E402
+from snakesim.components.perception.attach import attach_lidar, attach_stereo  # noqa: E402
+from snakesim.components.perception.hit_kernels import rays_to_world  # noqa: E402
+from snakesim.components.perception.ray_caster import SensorWorld, embree_scene  # noqa: E402
+from snakesim.framework.assembly import resolve  # noqa: E402
+from snakesim.framework.registry import default_registry  # noqa: E402
+from snakesim.framework.session import Session  # noqa: E402
+
+SCENES = {"obstacle-course": "perception-obstacle-course", "moulin": "moulin"}
+#: scenes whose robot has no head sensor frames (the moulin's EELS 1.5): mount on the front module
+MOUNTS = {"moulin": {"link": "module_03", "xyz": [0.45, 0.0, 0.1]}}
+DEFAULT = "surface-screw-traverse"
+
+
+def sensor_session(scene: str, duration: float | None = None) -> Session:
+    """The scene with a spinning-64 lidar and a 640x480 stereo pair (its own, or added)."""
+    reg = default_registry()
+    sim = {"duration": duration} if duration else {"duration": 0.002}
+    r = resolve(scene, search_path=reg.assembly_paths(), sim_overrides=sim)
+    if "lidar" in r.components:
+        r.components["lidar"].params.update(preset="spinning-64")
+        r.components["stereo"].params.update(width=640, height=480, light={"kind": "sun", "shadows": False})
+    else:
+        attach_lidar(r, "spinning-64", reg)
+        attach_stereo(r, "640x480", reg)
+        for name in ("lidar", "stereo"):
+            r.components[name].params.update(MOUNTS.get(scene, {}))
+    return Session(r, reg)
+
+
+def initial_world(scene: str) -> tuple[SensorWorld, Session]:
+    """The sensor_scene's world at the scene's first step (captured from its output; the plan binds
+    methods at build, so the spy goes in first)."""
+    seen = {}
+    original = SensorScene.output
+
+    def spy(self, t, x, u, y):
+        original(self, t, x, u, y)
+        seen.setdefault("world", y.world)
+
+    SensorScene.output = spy
+    try:
+        s = sensor_session(scene)
+        s.run()
+    finally:
+        SensorScene.output = original
+    return seen["world"], s
+
+
+def fresh(world: SensorWorld) -> SensorWorld:
+    """The same instant with no robot scene built yet."""
+    return SensorWorld(world.t, world.terrain, world.robot, world.link_poses)
+
+
+def best(fn, repeats: int) -> float:
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return min(times)
+
+
+def raw_scene(world: SensorWorld):
+    """One Embree scene of the terrain mesh and the posed robot mesh."""
+    ter = world.terrain.surfaces
+    rob = world.robot
+    posed = rob.posed(world.rotations, world.link_poses[:, :3])
+    V = np.vstack([ter.vertices, posed])
+    F = np.vstack([ter.faces, rob.faces + len(ter.vertices)]).astype(np.int32)
+    return embree_scene((V, F))
+
+
+def world_rays(R, p, o_l, d_l, min_range):
+    n = len(o_l)
+    o_w, d_w = np.empty((n, 3)), np.empty((n, 3))
+    o32, d32 = np.empty((n, 3), np.float32), np.empty((n, 3), np.float32)
+    rays_to_world(o_l, d_l, R, p, float(min_range), o_w, d_w, o32, d32)
+    return o32, d32
+
+
+def rays(scene: str, repeats: int) -> dict:
+    world, s = initial_world(SCENES[scene])
+    lidar, stereo = s.plan.components["lidar"], s.plan.components["stereo"]
+    world.scenes()                                     # built once for the instant, as in a run
+    raw = raw_scene(world)
+
+    # the lidar: its pose, its beams, the same rays raw
+    R_wl, p_wl = world.link_pose(lidar.row)
+    R, p = R_wl @ lidar.R_ls, p_wl + R_wl @ lidar.p_ls
+    o32, d32 = world_rays(R, p, lidar.pattern.origins, lidar.pattern.directions, 1e-6)
+    far = np.full(len(o32), lidar.max_range, np.float32)
+    raw.run(o32[:10], d32[:10])
+    t_raw_l = best(lambda: raw.run(o32, d32, dists=far.copy(), query="INTERSECT", output=1), repeats)
+    lidar.sample(world, 0.0, 0)
+    t_pipe_l = best(lambda: lidar.sample(world, 0.0, 0), repeats)
+    t_frame_l = best(lambda: lidar.sample(fresh(world), 0.0, 0), repeats)
+
+    # the stereo pair: both eyes' rays raw, against both renders
+    Rl, pl = stereo.pose(world)
+    Rr, pr = stereo.pose(world, (stereo.p.baseline, 0.0, 0.0))
+    eyes = [world_rays(Rc, pc, stereo._o, stereo._d, stereo.p.near) for Rc, pc in ((Rl, pl), (Rr, pr))]
+    farc = np.full(len(stereo._o), stereo.p.max_range, np.float32)
+    n_cam = 2 * len(stereo._o)
+    t_raw_c = best(lambda: [raw.run(a, b, dists=farc.copy(), query="INTERSECT", output=1) for a, b in eyes], repeats)
+
+    def render(w):
+        stereo.render(w, Rl, pl, 0.0, 0, "left")
+        stereo.render(w, Rr, pr, 0.0, 0, "right")
+
+    render(world)
+    t_pipe_c = best(lambda: render(world), repeats)
+    t_frame_c = best(lambda: render(fresh(world)), repeats)
+    t_build = best(lambda: fresh(world).scenes(), repeats)
+    n_l = len(o32)
+    return {
+        "scene": SCENES[scene],
+        "terrain_faces": int(len(world.terrain.surfaces.faces)), "robot_faces": int(len(world.robot.faces)),
+        "lidar_rays": n_l, "camera_rays": n_cam,
+        "lidar_raw_rays_per_s": n_l / t_raw_l, "lidar_pipeline_rays_per_s": n_l / t_pipe_l,
+        "lidar_efficiency": t_raw_l / t_pipe_l, "lidar_frame_s": t_frame_l,
+        "camera_raw_rays_per_s": n_cam / t_raw_c, "camera_pipeline_rays_per_s": n_cam / t_pipe_c,
+        "camera_efficiency": t_raw_c / t_pipe_c, "stereo_frame_s": t_frame_c,
+        "robot_scene_build_s": t_build,
+    }
+
+
+def rtf(duration: float, repeats: int) -> dict:
+    reg = default_registry()
+
+    def session(sensors: bool) -> Session:
+        r = resolve(DEFAULT, search_path=reg.assembly_paths(), sim_overrides={"duration": duration})
+        if sensors:
+            attach_lidar(r, "spinning-64", reg)
+            attach_stereo(r, "640x480", reg)
+        return Session(r, reg)
+
+    on, off = session(True), session(False)
+    on.run(), off.run()                                 # warm-up: JIT, caches, first-run opening
+    walls = {"on": [], "off": []}
+    for _ in range(repeats):
+        for key, s in (("off", off), ("on", on)):
+            t0 = time.perf_counter()
+            s.run()
+            walls[key].append(time.perf_counter() - t0)
+    w_on, w_off = min(walls["on"]), min(walls["off"])
+    return {"scene": DEFAULT, "sim_time_s": duration, "wall_on_s": w_on, "wall_off_s": w_off,
+            "rtf_on": duration / w_on, "rtf_off": duration / w_off, "ratio_on_off": w_on / w_off,
+            "sensors": "lidar spinning-64 (64x1024) at 10 Hz, stereo 640x480 at 5 Hz"}
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--duration", type=float, default=2.0, help="simulated s per real-time-factor run")
+    ap.add_argument("--json", dest="json_path")
+    a = ap.parse_args(argv)
+    results = [rays(name, a.repeats) for name in SCENES]
+    print(f"{'scene':>28} {'sensor':>8} {'rays':>8} {'raw Mray/s':>10} {'pipe Mray/s':>11} {'pipe/raw':>8} "
+          f"{'frame ms':>9}")
+    for r in results:
+        print(f"{r['scene']:>28} {'lidar':>8} {r['lidar_rays']:8d} {r['lidar_raw_rays_per_s'] / 1e6:10.2f} "
+              f"{r['lidar_pipeline_rays_per_s'] / 1e6:11.2f} {r['lidar_efficiency']:8.2f} "
+              f"{1e3 * r['lidar_frame_s']:9.1f}")
+        print(f"{'':>28} {'stereo':>8} {r['camera_rays']:8d} {r['camera_raw_rays_per_s'] / 1e6:10.2f} "
+              f"{r['camera_pipeline_rays_per_s'] / 1e6:11.2f} {r['camera_efficiency']:8.2f} "
+              f"{1e3 * r['stereo_frame_s']:9.1f}")
+        print(f"{'':>28} scene build per instant {1e3 * r['robot_scene_build_s']:.1f} ms "
+              f"({r['robot_faces']} faces; terrain {r['terrain_faces']} faces)")
+    print("target: pipeline/raw >= 0.7; frame times include the instant's robot scene build")
+    t = rtf(a.duration, a.repeats)
+    print(f"\n{t['scene']}, {t['sim_time_s']:g} s, best of {a.repeats}: sensors off {t['rtf_off']:.3f}x real time, "
+          f"on {t['rtf_on']:.3f}x ({t['sensors']}); wall ratio on/off {t['ratio_on_off']:.2f} (goal: on >= 1x)")
+    if a.json_path:
+        with open(a.json_path, "w") as f:
+            json.dump({"machine": platform.platform(), "python": sys.version.split()[0], "rays": results, "rtf": t},
+                      f, indent=2)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
