@@ -37,6 +37,9 @@ class SensorSceneParams(Params):
                                                   "(unbounded kinds): beyond it sensors see nothing")
     cell: float = Field(0.1, gt=0, description="m, tessellation of curved analytic terrains (hits are "
                                                "refined onto the exact surface)")
+    refine: bool = Field(True, description="refine hits on curved analytic terrains onto the exact surface "
+                                           "(off: the tessellation at cell, faster on costly kinds such as "
+                                           "the moulin)")
     refine_limit: float = Field(0.5, gt=0, description="m, largest refinement step accepted")
     robot_visible: bool = Field(True, description="the robot's own bodies occlude and return (self-occlusion)")
     robot_albedo: float | None = Field(None, ge=0, le=1, description="albedo of every link (None: the "
@@ -67,7 +70,7 @@ class SensorScene(Component[SensorSceneParams]):
         if terrain is not None and cache.terrain is not terrain:
             p = self.p
             cache.terrain = terrain
-            cache.scene = StaticTerrainScene(terrain_surfaces(terrain, p.center, p.extent, p.cell),
+            cache.scene = StaticTerrainScene(terrain_surfaces(terrain, p.center, p.extent, p.cell, p.refine),
                                              p.refine_limit)
         y.world = SensorWorld(t, cache.scene, self._surfaces, u.link_poses.copy() if self.nl else None)
 

@@ -59,9 +59,10 @@ class RobotSurfaces:
 
 
 def terrain_surfaces(terrain: Terrain, center=(0.0, 0.0, 0.0), extent: float = 30.0,
-                     cell: float = 0.1) -> TerrainSurfaces:
+                     cell: float = 0.1, refine: bool = True) -> TerrainSurfaces:
     """The terrain as a sensor sees it: its display mesh with nothing cut away, ``extent`` (m)
-    around ``center`` for unbounded kinds, curved kinds tessellated at ``cell`` (m)."""
+    around ``center`` for unbounded kinds, curved kinds tessellated at ``cell`` (m) and, with
+    ``refine``, their hits refined onto the exact surface."""
     from snakesim.components.viz.terrain_geometry import terrain_mesh
 
     if is_flat(terrain) or _cell_is_only_checkerboard(terrain):
@@ -74,7 +75,7 @@ def terrain_surfaces(terrain: Terrain, center=(0.0, 0.0, 0.0), extent: float = 3
     m = at_centroid.material
     # a flat face lies on the surface to float32 rounding of its vertices (≈1e-7 relative)
     off = np.abs(at_centroid.distance) > SAG_TOL * np.maximum(1.0, np.abs(V[F[:, 0]]).max(axis=1))
-    return TerrainSurfaces(terrain, V, F, m, albedo[m], color[m], refine=off & is_exact(terrain))
+    return TerrainSurfaces(terrain, V, F, m, albedo[m], color[m], refine=off & (refine and is_exact(terrain)))
 
 
 #: a face whose centroid is farther than this (relative) from the surface approximates a curve
