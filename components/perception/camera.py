@@ -33,7 +33,7 @@ import dataclasses
 from typing import Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, field_validator
+from pydantic import ConfigDict, Field, field_validator
 
 from snakesim.components.multibody.robot_model import RobotModel
 from snakesim.components.port_roles import CAMERA_FRAME
@@ -70,7 +70,7 @@ class CameraFrame:
         return dataclasses.replace(self, image=image)
 
 
-class Light(BaseModel):
+class Light(Params):
     """The scene's light as the camera sees it."""
 
     model_config = ConfigDict(frozen=True, extra="forbid")
@@ -153,7 +153,8 @@ class _Camera(Component):
         headlamp = light.kind == "headlamp"
         shadowed = np.zeros(len(d_w), dtype=np.bool_)
         if not headlamp and light.shadows:
-            lit = np.flatnonzero(np.isfinite(hits.distance) & (hits.normal @ self._sun > 0))
+            hit = np.flatnonzero(np.isfinite(hits.distance))
+            lit = hit[hits.normal[hit] @ self._sun > 0]
             p_hit = o_w[lit] + hits.distance[lit, None] * d_w[lit] + SHADOW_OFFSET * hits.normal[lit]
             shadowed[lit] = world.cast(p_hit, np.broadcast_to(self._sun, p_hit.shape), prm.max_range).hit
         channels = 3 if prm.color else 1

@@ -32,7 +32,7 @@ BODY_TO_OPTICAL = np.array([[0.0, 0.0, 1.0],
 class SensorMount(BaseModel):
     """A sensor's frame on a robot link."""
 
-    model_config = ConfigDict(frozen=True, extra="forbid")
+    model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
     link: str = Field(..., description="robot link (URDF name) the sensor is fixed to")
     xyz: Vec3 = Field((0.0, 0.0, 0.0), description="m, sensor origin in the link frame")
     rpy: Vec3 = Field((0.0, 0.0, 0.0), description="rad, sensor axes in the link frame (URDF roll-pitch-yaw)")

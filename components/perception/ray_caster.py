@@ -17,9 +17,9 @@ returns its exact range, not its tessellation's (two iterations; a step larger t
 refined (``TerrainSurfaces.refine``): a plane's faces are the plane.
 
 Results (``RayHits``): ``distance`` (n,) m along the ray, inf where nothing is hit
-within [min_range, max_range]; ``normal`` (n, 3) unit, world, facing the ray;
-``albedo`` (n,), ``color`` (n, 3); ``link`` (n,) the link row hit, −1 for terrain or
-nothing.
+within [min_range, max_range]; for the hit rays (``hit``), ``normal`` (n, 3) unit, world,
+facing the ray; ``albedo`` (n,), ``color`` (n, 3); ``link`` (n,) the link row hit, −1 for
+terrain or nothing (the other fields of a missed ray are unset).
 """
 
 from __future__ import annotations
@@ -180,7 +180,8 @@ class SensorWorld:
         start32, d32 = np.empty((n, 3), np.float32), np.empty((n, 3), np.float32)
         rays_to_world(origins, directions, np.ascontiguousarray(R, dtype=np.float64),
                       np.asarray(p, dtype=np.float64), float(min_range), o_w, d_w, start32, d32)
-        out = RayHits(np.empty(n), np.zeros((n, 3)), np.zeros(n), np.zeros((n, 3)), np.empty(n, dtype=np.int64))
+        # rows of missed rays are left unset except distance (inf): readers select hits first
+        out = RayHits(np.empty(n), np.empty((n, 3)), np.empty(n), np.empty((n, 3)), np.empty(n, dtype=np.int64))
         material = np.empty(n, dtype=np.int64)
         refine = np.empty(n, dtype=np.bool_)
         far32 = np.full(n, max_range - min_range, dtype=np.float32)
