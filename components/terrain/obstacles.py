@@ -29,10 +29,11 @@ Normal: the gradient of the winning solid's distance: +z for the ground, (p − 
 rock; for a block outside, the direction from its closest point (face, edge or corner) to p;
 inside, the normal of the nearest face. Regions: ground, blocks, rocks (the winning solid's).
 
-Queries are vectorised over points × obstacles in blocks of at most ``PAIRS_PER_BLOCK`` pairs,
-so memory stays a few MB whatever the number of points. A broad phase drops, per block, the
-obstacles whose bounding sphere is farther from every point than the ground (a robot on the ice
-only pays for the obstacles near it).
+Queries run in one numba kernel (obstacle_kernels.py) over the obstacles packed into arrays
+once: per point the ground, then the blocks and rocks in index order, keeping the least distance
+(ties go to the earlier solid). An exact broad phase skips the obstacles whose bounding sphere is
+farther than the best distance so far (a robot on the ice only pays for the obstacles near it);
+``broad_phase = False`` evaluates every obstacle for every point (the reference).
 
 :func:`scatter_obstacles` draws a reproducible course of random blocks and rocks (seeded),
 without overlaps and outside a keep-clear disc around the robot's start.
@@ -45,11 +46,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .base import Bounds, Terrain, unit
-
-_Z = np.array([0.0, 0.0, 1.0])
-#: point·obstacle pairs per vectorised block (~30 floats of temporaries each: a few MB)
-PAIRS_PER_BLOCK = 1 << 15
+from .base import Bounds, Terrain
+from .obstacle_kernels import obstacle_query
 
 
 def rpy_matrix(roll: float = 0.0, pitch: float = 0.0, yaw: float = 0.0) -> np.ndarray:
@@ -128,17 +126,19 @@ class ObstacleField(Terrain):
         _check_obstacles(blocks, rocks)
         self.ground_height = float(ground_height)
         self.blocks, self.rocks = tuple(blocks), tuple(rocks)
+        # packed once for the kernel (obstacle_kernels.py)
         self._box_center = np.array([b.center for b in self.blocks], dtype=float).reshape(-1, 3)
         self._box_half = 0.5 * np.array([b.size for b in self.blocks], dtype=float).reshape(-1, 3)
-        self._box_rot = np.array([b.rotation for b in self.blocks]).reshape(-1, 3, 3)
-        self._box_side = np.array([buried_sides(b, self.ground_height) for b in self.blocks]).reshape(-1, 3)
-        # local = Rᵀ(p − c) for every block in one product: p @ [R_1 R_2 ...] − (Rᵀc per block)
-        self._box_rot_cols = np.concatenate(list(self._box_rot), axis=1) if self.blocks else np.zeros((3, 0))
-        self._box_center_local = np.einsum("mi,mij->mj", self._box_center, self._box_rot)
-        self._rock_center = np.array([r.center for r in self.rocks], dtype=float).reshape(-1, 3)
-        self._rock_radius = np.array([r.radius for r in self.rocks], dtype=float)
+        self._box_rot = np.array([b.rotation for b in self.blocks], dtype=float).reshape(-1, 3, 3)
+        self._box_side = np.array([buried_sides(b, self.ground_height) for b in self.blocks],
+                                  dtype=float).reshape(-1, 3)
         self._box_reach = np.linalg.norm(self._box_half, axis=1)          # bounding sphere radius
         self._box_extended = (self._box_side != 0).any(axis=1)
+        deep = [deep_sphere(b, side, self.ground_height) for b, side in zip(self.blocks, self._box_side)]
+        self._deep_center = np.array([c for c, _ in deep], dtype=float).reshape(-1, 3)
+        self._deep_radius = np.array([r for _, r in deep], dtype=float)
+        self._rock_center = np.array([r.center for r in self.rocks], dtype=float).reshape(-1, 3)
+        self._rock_radius = np.array([r.radius for r in self.rocks], dtype=float)
 
     def bounds(self):
         # below the ground everything is solid, so the surface starts at the ground
@@ -146,91 +146,66 @@ class ObstacleField(Terrain):
         h = self.ground_height
         return Bounds(np.array([-np.inf, -np.inf, h]), np.array([np.inf, np.inf, max([h, *tops])]))
 
+    #: skip the obstacles that cannot win (bounding spheres, see obstacle_kernels.py); False
+    #: evaluates every obstacle for every point (the reference)
+    broad_phase: bool = True
+    #: consecutive points sharing one broad-phase candidate list (a screw's samples lie together)
+    CHUNK = 32
+
     def _query(self, p):
         n = len(p)
         d, normal, region = np.empty(n), np.empty((n, 3)), np.empty(n, dtype=np.int64)
-        step = max(1, PAIRS_PER_BLOCK // max(1, len(self.blocks) + len(self.rocks)))
-        for s in range(0, n, step):
-            sl = slice(s, s + step)
-            d[sl], normal[sl], region[sl] = self._query_block(p[sl])
+        obstacle_query(p, self.ground_height, self._box_center, self._box_rot, self._box_half, self._box_side,
+                       self._box_extended, self._box_reach, self._deep_center, self._deep_radius,
+                       self._rock_center, self._rock_radius, bool(self.broad_phase), self.CHUNK, d, normal, region)
         return d, normal, region
 
-    #: skip, per block of points, the obstacles whose bounding sphere is farther than the ground
-    #: from every point (they cannot win); False evaluates every obstacle (the reference)
-    broad_phase: bool = True
 
-    def _query_block(self, p):
-        """The candidate solids' distances for these points, then the winner's normal and region."""
-        k = len(p)
-        above = p[:, 2] - self.ground_height                   # the ground's distance
-        bi, ri = self._near(p, above)
-        candidates = [above[:, None]]
-        if len(bi):
-            every = len(bi) == len(self.blocks)                  # nothing dropped: no need to gather
-            pick = (lambda a: a) if every else (lambda a: a[bi])  # noqa: E731
-            rot_cols = self._box_rot_cols if every else self._box_rot_cols.reshape(3, -1, 3)[:, bi].reshape(3, -1)
-            local = (p @ rot_cols).reshape(k, len(bi), 3) - pick(self._box_center_local)
-            # per axis, the face on this side of the centre; through a buried face, always the other one
-            box_side = pick(self._box_side)
-            side = np.where(box_side != 0, box_side, np.where(local >= 0, 1.0, -1.0))
-            excess = side * local - pick(self._box_half)         # > 0 on the axes where p is beyond a face
-            beyond = np.maximum(excess, 0.0)
-            candidates.append(np.sqrt(np.einsum("kmj,kmj->km", beyond, beyond)) + np.minimum(excess.max(axis=2), 0.0))
-        if len(ri):
-            every = len(ri) == len(self.rocks)
-            offset = p[:, None, :] - (self._rock_center if every else self._rock_center[ri])
-            radius = self._rock_radius if every else self._rock_radius[ri]
-            candidates.append(np.sqrt(np.einsum("kmj,kmj->km", offset, offset)) - radius)
-        dist = np.concatenate(candidates, axis=1)
-        winner = dist.argmin(axis=1)                               # ties go to the ground, then blocks
-        d = dist[np.arange(k), winner]
-        normal = np.broadcast_to(_Z, (k, 3)).copy()
-        region = np.full(k, self.GROUND, dtype=np.int64)
-        nb = len(bi)
-        on_block = (winner >= 1) & (winner <= nb)
-        if on_block.any():
-            j = winner[on_block] - 1
-            n_local = box_normal(side[on_block, j], excess[on_block, j])
-            normal[on_block] = np.einsum("kij,kj->ki", self._box_rot[bi[j]], n_local)
-            region[on_block] = self.BLOCKS
-        on_rock = winner > nb
-        if on_rock.any():
-            j = winner[on_rock] - 1 - nb
-            normal[on_rock] = unit(offset[on_rock, j])
-            region[on_rock] = self.ROCKS
-        return d, normal, region
+def deep_sphere(block: Block, side: np.ndarray, ground_height: float) -> tuple[np.ndarray, float]:
+    """A sphere (centre, radius) holding every point under the ground where the block, extended
+    through its buried faces (``side``, see :func:`buried_sides`), is deeper than the ground.
 
-    def _near(self, p, above):
-        """Indices of the blocks and rocks that may be nearer than the ground to some point: by
-        bounding spheres, except that under the ground a block extended through a buried face
-        (unbounded downwards) always may."""
-        every = np.arange(len(self.blocks)), np.arange(len(self.rocks))
-        if not self.broad_phase:
-            return every
-        ceiling = above[:, None] + 1e-6            # the sphere distances below lose ~1e-7 to rounding
-        pp = np.einsum("kj,kj->k", p, p)[:, None]
-        out = []
-        for centers, radius, always in ((self._box_center, self._box_reach, self._box_extended),
-                                        (self._rock_center, self._rock_radius, None)):
-            gap = np.sqrt(np.maximum(pp - 2 * p @ centers.T + np.einsum("mj,mj->m", centers, centers), 0.0)) - radius
-            keep = (gap < ceiling).any(axis=0)
-            if always is not None and (above < 0).any():
-                keep |= always
-            out.append(np.flatnonzero(keep))
-        return tuple(out)
-
-
-def box_normal(side: np.ndarray, excess: np.ndarray) -> np.ndarray:
-    """Gradient of a box's distance in its frame, for points with per-axis ``excess`` (k, 3) =
-    side·local − half size beyond the face on ``side`` (±1): outside, the unit vector from the
-    closest point (on a face, edge or corner) to the point; inside or on the surface, the normal
-    of the nearest face."""
-    outside = excess.max(axis=1) > 0
-    out = unit(side * np.maximum(excess, 0.0))
-    rows, face = np.arange(len(side)), excess.argmax(axis=1)
-    inside = np.zeros_like(side)
-    inside[rows, face] = side[rows, face]
-    return np.where(outside[:, None], out, inside)
+    There d_block < z − h < 0: the point is inside the extended solid and, as d_block >=
+    |local_j| − half_j >= −half_j on an axis j not extended, less than D = min half_j deep. The
+    extended solid is the box plus the cone of the buried faces' outward normals u_k (u_k,z < 0);
+    its part above z = h − D lies in the box plus the simplex {Σ t_k u_k : Σ t_k |u_k,z| <= T},
+    T = highest corner − h + D, the hull H of the corners shifted by 0 and by each
+    (T / |u_k,z|) u_k. The vertices of H ∩ {h − D <= z <= h} are among H's points in the slab and
+    the crossings of the slab's planes by segments between H's points: the sphere bounds these.
+    Radius −inf: no such point (the block never beats the ground under it); inf: no bound (every
+    axis extended, or a buried face all but vertical). An unextended block: its bounding sphere."""
+    center = np.asarray(block.center, dtype=float)
+    half = 0.5 * np.asarray(block.size, dtype=float)
+    ext = [k for k in range(3) if side[k] != 0]
+    if not ext:
+        return center, float(np.linalg.norm(half))
+    if len(ext) == 3:
+        return center, np.inf
+    h = ground_height
+    depth = min(half[k] for k in range(3) if side[k] == 0)
+    R, corners = block.rotation, block.corners()
+    reach = max(corners[:, 2].max() - h + depth, 0.0)
+    pts = [corners]
+    for k in ext:
+        u = -side[k] * R[:, k]                   # outward normal of the buried face, u_z < 0
+        pts.append(corners + (reach / -u[2]) * u)
+    pts = np.vstack(pts)
+    if not np.isfinite(pts).all():
+        return center, np.inf
+    keep = [pts[(pts[:, 2] >= h - depth) & (pts[:, 2] <= h)]]
+    a, b = np.triu_indices(len(pts), 1)
+    za, zb = pts[a, 2], pts[b, 2]
+    for level in (h - depth, h):
+        cross = (za - level) * (zb - level) < 0
+        t = (level - za[cross]) / (zb[cross] - za[cross])
+        at = pts[a[cross]] + t[:, None] * (pts[b[cross]] - pts[a[cross]])
+        at[:, 2] = level
+        keep.append(at)
+    keep = np.vstack(keep)
+    if not len(keep):
+        return center, -np.inf
+    mid = 0.5 * (keep.min(axis=0) + keep.max(axis=0))
+    return mid, float(np.linalg.norm(keep - mid, axis=1).max() * (1 + 1e-9) + 1e-12)
 
 
 def buried_sides(block: Block, ground_height: float, tol: float = 1e-9) -> np.ndarray:

@@ -1,12 +1,14 @@
 """Obstacle field (kind obstacles): distances against hand-derived values, normals against the
-gradient, closest points, regions, the seeded random course, schema errors, the shipped course."""
+gradient, closest points, regions, the numba kernel against the NumPy implementation it replaced,
+the seeded random course, schema errors, the shipped course."""
 
 import numpy as np
 import pytest
 from surface_checks import fd_gradient
 
 from snakesim.components.terrain import Block, ObstacleField, Rock, build_terrain, load_terrain, scatter_obstacles
-from snakesim.components.terrain.obstacles import rpy_matrix
+from snakesim.components.terrain.base import unit
+from snakesim.components.terrain.obstacles import buried_sides, rpy_matrix
 from snakesim.framework import ConfigError
 
 rng = np.random.default_rng(7)
@@ -140,24 +142,24 @@ def test_closest_points_lie_on_the_surface():
     np.testing.assert_allclose(np.abs(_solo_distances(t, q.closest[inside])).min(axis=1), 0.0, atol=1e-12)
 
 
-def test_blocked_query_and_broad_phase_match_the_reference():
+def test_chunked_query_and_broad_phase_match_the_reference():
     t = _course()
-    p = np.vstack([rng.uniform(-1, 4, (40_000, 3)),                 # > one block of point·obstacle pairs
+    p = np.vstack([rng.uniform(-1, 4, (40_000, 3)),
                    np.column_stack([rng.uniform(0.5, 3.5, 3000), rng.uniform(-1, 1, 3000),
                                     rng.uniform(-0.05, 0.05, 3000)])])      # near the ice, some under it
     q = t.query(p)
-    for i in rng.choice(len(p), 50, replace=False):                 # one point at a time: no blocks
+    for i in rng.choice(len(p), 50, replace=False):                 # one point at a time: a chunk of one
         one = t.query(p[i])
-        assert one.distance[0] == pytest.approx(q.distance[i], abs=1e-15)
-        np.testing.assert_allclose(one.normal[0], q.normal[i], atol=1e-15)
+        assert one.distance[0] == q.distance[i]
+        assert np.array_equal(one.normal[0], q.normal[i])
     # small queries (a robot's contact points) where the broad phase drops most obstacles
     clusters = [c + rng.normal(0, 0.03, (10, 3)) for c in
                 np.column_stack([rng.uniform(0.5, 3.5, 300), rng.uniform(-1, 1, 300), rng.uniform(-0.05, 0.3, 300)])]
     small = [t.query(c) for c in clusters]
     t.broad_phase = False                                           # every obstacle for every point
     for got, ref in [(q, t.query(p))] + [(s, t.query(c)) for s, c in zip(small, clusters)]:
-        np.testing.assert_allclose(got.distance, ref.distance, atol=1e-15)
-        np.testing.assert_allclose(got.normal, ref.normal, atol=1e-15)
+        assert np.array_equal(got.distance, ref.distance)          # the same arithmetic: bit for bit
+        assert np.array_equal(got.normal, ref.normal)
         assert np.array_equal(got.material, ref.material)
 
 
@@ -180,6 +182,156 @@ def test_distance_lower_bound_is_conservative():
     for ci, ri, b in zip(c, r, bound):
         pts = ci + ri * dirs * rng.uniform(0, 1, (300, 1)) ** (1 / 3)
         assert b <= t.distance(pts).min() + 1e-12
+
+
+# -- the numba kernel against the NumPy implementation it replaced ------------------------------
+
+def _numpy_reference(t, p):
+    """The former vectorised ObstacleField._query, every obstacle for every point (no broad
+    phase): -> distance, normal, region. One change: the local coordinates are Rᵀ(p − c), where
+    it took p·R − Rᵀc, whose cancellation (~1e-15 m at |p| ~ 8 m) tilted normals near an edge
+    by up to ~2e-12 (the normal there turns by 1 over the distance to the edge); the kernel's
+    are within ~2e-14 of an extended-precision evaluation at those points."""
+    k, nb = len(p), len(t.blocks)
+    above = p[:, 2] - t.ground_height
+    candidates = [above[:, None]]
+    if nb:
+        rot = np.array([b.rotation for b in t.blocks])
+        half = 0.5 * np.array([b.size for b in t.blocks], dtype=float)
+        box_side = np.array([buried_sides(b, t.ground_height) for b in t.blocks])
+        center = np.array([b.center for b in t.blocks], dtype=float)
+        local = np.einsum("mij,kmi->kmj", rot, p[:, None, :] - center)
+        side = np.where(box_side != 0, box_side, np.where(local >= 0, 1.0, -1.0))
+        excess = side * local - half
+        beyond = np.maximum(excess, 0.0)
+        candidates.append(np.sqrt(np.einsum("kmj,kmj->km", beyond, beyond)) + np.minimum(excess.max(axis=2), 0.0))
+    if t.rocks:
+        offset = p[:, None, :] - np.array([r.center for r in t.rocks], dtype=float)
+        candidates.append(np.sqrt(np.einsum("kmj,kmj->km", offset, offset)) - np.array([r.radius for r in t.rocks]))
+    dist = np.concatenate(candidates, axis=1)
+    winner = dist.argmin(axis=1)
+    d = dist[np.arange(k), winner]
+    normal = np.tile([0.0, 0.0, 1.0], (k, 1))
+    region = np.zeros(k, dtype=np.int64)
+    on_block = (winner >= 1) & (winner <= nb)
+    if on_block.any():
+        j = winner[on_block] - 1
+        sd, ex = side[on_block, j], excess[on_block, j]
+        rows, face = np.arange(len(sd)), ex.argmax(axis=1)
+        inside = np.zeros_like(sd)
+        inside[rows, face] = sd[rows, face]
+        n_local = np.where((ex.max(axis=1) > 0)[:, None], unit(sd * np.maximum(ex, 0.0)), inside)
+        normal[on_block] = np.einsum("kij,kj->ki", rot[j], n_local)
+        region[on_block] = ObstacleField.BLOCKS
+    on_rock = winner > nb
+    if on_rock.any():
+        normal[on_rock] = unit(offset[on_rock, winner[on_rock] - 1 - nb])
+        region[on_rock] = ObstacleField.ROCKS
+    return d, normal, region
+
+
+def _sunk(x, size, roll, pitch, yaw, below):
+    """A block at (x, 0.3) sunk so that its ``below``-th lowest corner touches z = −0.01."""
+    b = Block((0.0, 0.0, 0.0), size, yaw=yaw, roll=roll, pitch=pitch)
+    return Block((x, 0.3, -np.sort(b.corners()[:, 2])[below] - 0.01), size, yaw=yaw, roll=roll, pitch=pitch)
+
+
+def _tricky_course():
+    """Blocks extended through 1, 2 and 3 buried faces, one through a face all but vertical,
+    floating and resting blocks, solids overlapping (a thin slab before a tall post on it: inside
+    both, just above the ice, the post is deeper than the slab though its bounding sphere is
+    not), a rock in a block, a boulder."""
+    blocks = [Block((0.0, 0.0, 0.2), (0.4, 0.4, 0.4), yaw=0.3),                     # resting: 1 face
+              _sunk(1.0, (0.3, 0.25, 0.35), 0.6, 0.5, 0.2, -3),                     # 2 faces
+              _sunk(2.0, (0.4, 0.3, 0.25), 0.7, 0.0, 0.4, -3),                      # 2 faces
+              _sunk(3.0, (0.3, 0.25, 0.35), 0.6, 0.5, 0.2, -2),                     # 3 faces
+              _sunk(4.0, (0.4, 0.3, 0.3), 0.3, 0.2, 0.0, -2),                       # 3 faces
+              _sunk(5.0, (0.4, 0.3, 0.3), 1.5, 0.0, 0.3, 5),                        # 2, one 4° off vertical
+              Block((6.0, 0.0, 0.5), (0.3, 0.3, 0.3), roll=0.3, pitch=0.5, yaw=1.0),   # floating
+              Block((7.0, 0.0, 0.05), (0.5, 0.4, 0.3), roll=0.2),                   # tilted, half sunk
+              Block((8.0, 0.0, 0.025), (1.0, 1.0, 0.05)),                           # the slab ...
+              Block((8.1, 0.1, 1.0), (0.2, 0.2, 2.0), yaw=0.2)]                     # ... and the post on it
+    rocks = [Rock((7.0, 0.1, 0.1), 0.15), Rock((9.0, 0.0, -0.1), 0.3), Rock((6.0, 0.0, 0.5), 0.1)]
+    return ObstacleField(0.0, blocks, rocks)
+
+
+def _probe_points(t, n):
+    """n points per kind: at corners and edges, inside the blocks (and past their buried faces),
+    on the rocks, near and under the ground, anywhere, far away."""
+    pts = []
+    for b in t.blocks:
+        R, c, half = b.rotation, np.asarray(b.center), 0.5 * np.asarray(b.size)
+        corners = b.corners()
+        mids = 0.5 * (corners[:, None] + corners[None, :]).reshape(-1, 3)        # edge and face centres
+        near = np.vstack([corners, mids])[rng.integers(0, 72, n)] + rng.normal(0, 0.01, (n, 3))
+        local = rng.uniform(-1.2, 1.2, (n, 3)) * half
+        local[: n // 2, 2] -= rng.uniform(0, 3, n // 2) * half[2]               # down past the bottom
+        pts += [near, c + local @ R.T]
+    for r in t.rocks:
+        u = rng.standard_normal((n, 3))
+        u /= np.linalg.norm(u, axis=1, keepdims=True)
+        pts.append(np.asarray(r.center) + u * r.radius * rng.uniform(0.5, 1.3, (n, 1)))
+    lo = np.array([-1.0, -1.5, -0.5])
+    hi = np.array([1.0 + max(b.center[0] for b in (*t.blocks, *t.rocks)), 2.0, 1.0])
+    pts.append(rng.uniform(lo, hi, (10 * n, 3)))
+    pts.append(np.column_stack([rng.uniform(lo[0], hi[0], 10 * n), rng.uniform(lo[1], hi[1], 10 * n),
+                                rng.normal(t.ground_height, 0.03, 10 * n)]))
+    pts.append(rng.uniform(-1e3, 1e3, (n, 3)))
+    p = np.vstack(pts)
+    return p[rng.permutation(len(p))]
+
+
+@pytest.mark.parametrize("course", ["tricky", "shipped"])
+def test_kernel_matches_the_numpy_reference(course):
+    t = _tricky_course() if course == "tricky" else load_terrain("obstacle-course")
+    sides = np.array([buried_sides(b, t.ground_height) for b in t.blocks])
+    if course == "tricky":       # the course has what it says
+        assert sorted(np.count_nonzero(sides, axis=1).tolist()) == [0, 1, 1, 1, 1, 2, 2, 2, 3, 3]
+    p = _probe_points(t, 2000)
+    q = t.query(p)
+    d, normal, region = _numpy_reference(t, p)
+    assert np.array_equal(q.material, t.region_material[region])
+    np.testing.assert_allclose(q.distance, d, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(q.normal, normal, rtol=0, atol=1e-12)
+    # every kind of winner, and points inside, was tried
+    assert np.bincount(region, minlength=3).min() > 1000 and (d < 0).sum() > 1000
+    # the same points in strips 0.2 m wide along x, sorted along y (a chunk's points lie close
+    # together, as a screw's samples do: the broad phase drops the most)
+    order = np.lexsort((p[:, 1], np.floor(p[:, 0] / 0.2)))
+    s = t.query(p[order])
+    assert np.array_equal(s.distance, q.distance[order]) and np.array_equal(s.normal, q.normal[order])
+    # a robot's contact samples: rings of points 3 cm around paths across the course, near the
+    # ground, in order along the path (chunks of neighbours whose farthest point is a few cm up)
+    x = np.linspace(-1.0, 10.0, 4000)
+    rings = [np.column_stack([x, np.full_like(x, y), np.full_like(x, z)]) + 0.03 * rng.standard_normal((4000, 3))
+             for y in np.linspace(-1.0, 1.0, 9) for z in (-0.02, 0.0, 0.03)]
+    p = np.vstack(rings)
+    q = t.query(p)
+    d, normal, region = _numpy_reference(t, p)
+    assert np.array_equal(q.material, t.region_material[region]) and (region != ObstacleField.GROUND).sum() > 1000
+    np.testing.assert_allclose(q.distance, d, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(q.normal, normal, rtol=0, atol=1e-12)
+
+
+def test_non_finite_points_and_empty_queries():
+    """A point with a nan or inf coordinate gets distance nan and the region numpy's argmin gave
+    it (the first solid whose distance is nan); the other points of its chunk are unaffected."""
+    t = _tricky_course()
+    p = _probe_points(t, 20)[:40]
+    bad = p.copy()
+    bad[[3, 5, 17, 18, 30], [0, 2, 2, 0, 1]] = [np.nan, np.inf, -np.inf, np.inf, np.nan]
+    q, ref = t._query(bad), t._query(p)
+    odd = [3, 5, 17, 18, 30]
+    assert np.isnan(q[0][odd]).all()
+    with np.errstate(invalid="ignore"):
+        assert np.array_equal(q[2][odd], _numpy_reference(t, bad[odd])[2])
+    good = np.setdiff1d(np.arange(40), odd)
+    for got, want in zip(q, ref):
+        assert np.array_equal(got[good], want[good])
+    assert len(t.query(np.zeros((0, 3)))) == 0
+    flat = ObstacleField(0.5).query([[1.0, 2.0, 3.0], [0.0, 0.0, 0.2]])
+    np.testing.assert_allclose(flat.distance, [2.5, -0.3])
+    np.testing.assert_allclose(flat.normal, [[0, 0, 1]] * 2)
 
 
 # -- the seeded random course ------------------------------------------------------------------
