@@ -8,7 +8,11 @@ factor (sim time / wall time; > 1 is faster than real time), µs per step, the b
 time, and whether the run completed.
 
     .venv/bin/python bench/scaling.py [--modules 4,10,30,100] [--integrator semi_implicit_euler]
-                                      [--dt 0.001] [--duration 2] [--repeats 2] [--json FILE]
+                                      [--method ros2] [--dt 0.001] [--duration 2] [--repeats 2] [--json FILE]
+
+Each row also times MuJoCo's screw snake with as many modules in this process
+(../shared/peers/mujoco_snake.py; bench/mujoco_anchor.py) and prints the ratio, and the
+process's peak resident memory.
 
 Targets (issue 6): ≥ 10x real time at 10 modules, ≥ 1.5x at 100 modules. Reference
 figures from the issue: MuJoCo ~17-25x at 10 modules but 0.17x at 100; a hand-written
@@ -28,18 +32,26 @@ import json  # noqa: E402
 import platform  # noqa: E402
 import time  # noqa: E402
 
+import resource  # noqa: E402
+import sys  # noqa: E402
+from pathlib import Path  # noqa: E402
+
 import click  # noqa: E402
 
 from snakesim.framework.session import load_session  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from mujoco_anchor import mujoco_rtf  # noqa: E402
 
 SCENE = "surface-screw-traverse"
 TARGETS = {10: 10.0, 100: 1.5}
 
 
-def scene_row(modules: int, integrator: str, dt: float, duration: float, repeats: int) -> dict:
+def scene_row(modules: int, integrator: str, dt: float, duration: float, repeats: int, params: dict) -> dict:
     t0 = time.perf_counter()
     s = load_session(SCENE, overrides=[f"robot.modules={modules}"],
-                     sim_overrides={"duration": duration, "integrator": integrator, "dt": dt})
+                     sim_overrides={"duration": duration, "integrator": {"name": integrator, "params": params},
+                                    "dt": dt})
     build = time.perf_counter() - t0
     s.run()         # warm-up
     best = None
@@ -56,7 +68,9 @@ def scene_row(modules: int, integrator: str, dt: float, duration: float, repeats
     return {"modules": modules, "nv": nv, "integrator": integrator, "dt_s": dt, "sim_time_s": best["sim_time_s"],
             "wall_time_s": best["wall_time_s"], "real_time_factor": best["real_time_factor"],
             "us_per_step": best["wall_time_s"] / max(1, best["steps"]) * 1e6, "build_s": build,
-            "completed": best["completed"], "target_rtf": TARGETS.get(modules)}
+            "completed": best["completed"], "target_rtf": TARGETS.get(modules),
+            "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,
+            "mujoco_rtf": mujoco_rtf(modules, dt if dt <= 2e-3 else 2e-3, duration=min(duration, 2.0))}
 
 
 @click.command()
@@ -65,18 +79,26 @@ def scene_row(modules: int, integrator: str, dt: float, duration: float, repeats
 @click.option("--dt", default=0.001, help="s, base step (the recommended default)")
 @click.option("--duration", default=2.0, help="simulated seconds per run")
 @click.option("--repeats", default=2, help="timed runs per module count (best kept)")
+@click.option("--method", default=None, help="rosenbrock_w's method (ros2, ros34pw2)")
 @click.option("--json", "json_path", type=click.Path(dir_okay=False), help="write the figures here")
-def main(modules, integrator, dt, duration, repeats, json_path):
-    rows = [scene_row(int(m), integrator, dt, duration, repeats) for m in modules.split(",")]
-    print(f"{SCENE}, {integrator} at dt = {dt * 1e3:g} ms, {duration:g} s simulated, best of {repeats}")
-    print(f"{'modules':>7s} {'nv':>5s} {'build s':>8s} {'wall s':>8s} {'us/step':>9s} {'RTF':>7s} {'target':>7s}")
+def main(modules, integrator, dt, duration, repeats, method, json_path):
+    params = {"method": method} if method else {}
+    rows = [scene_row(int(m), integrator, dt, duration, repeats, params) for m in sorted(map(int, modules.split(",")))]
+    print(f"{SCENE}, {integrator}{params or ''} at dt = {dt * 1e3:g} ms, {duration:g} s simulated, best of {repeats}")
+    print("MuJoCo: its screw snake with as many modules, timed in this process (Euler at min(dt, 2 ms));\n"
+          "peak RSS: the process's peak so far (rows run in ascending module count, so a row's figure is its own\n"
+          "peak unless an earlier row's was higher)")
+    print(f"{'modules':>7s} {'nv':>5s} {'build s':>8s} {'wall s':>8s} {'us/step':>9s} {'RTF':>7s} {'target':>7s} "
+          f"{'MuJoCo':>7s} {'ratio':>6s} {'peak MB':>8s}")
     for r in rows:
         tgt = f"{r['target_rtf']:g}" if r["target_rtf"] else "-"
         flag = "" if r["completed"] else "  (did not complete)"
         if r["target_rtf"] and r["real_time_factor"] < r["target_rtf"]:
             flag += "  (below target)"
+        mj = r["mujoco_rtf"]
+        mjs, ratio = (f"{mj:7.2f}", f"{r['real_time_factor'] / mj:6.2f}") if mj else (f"{'-':>7s}", f"{'-':>6s}")
         print(f"{r['modules']:7d} {r['nv']:5d} {r['build_s']:8.2f} {r['wall_time_s']:8.3f} {r['us_per_step']:9.1f} "
-              f"{r['real_time_factor']:7.2f} {tgt:>7s}{flag}")
+              f"{r['real_time_factor']:7.2f} {tgt:>7s} {mjs} {ratio} {r['peak_rss_mb']:8.0f}{flag}")
     if json_path:
         with open(json_path, "w") as fh:
             json.dump({"machine": platform.processor() or platform.machine(), "python": platform.python_version(),

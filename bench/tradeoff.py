@@ -17,7 +17,10 @@ constraint solved through the CRBA, the unoptimised path) — it runs the scene 
                   monitor) is compared up to the earlier of its end and the reference's.
 
 The reference is the same scene at rk4, dt = 0.25 ms (tests/validation/validation_scenes.py),
-cached under bench/results/. `--quick`: traverse 2 s (compressed schedule), walls 1.5 s and a
+cached under bench/results/. MuJoCo's screw snake (../shared/peers/mujoco_snake.py) is timed in
+the same process first; "x MuJoCo" is each row's RTF over MuJoCo's at 1 ms. Then the held-robot
+cases (bench/held_cases.py: a held pair on a slope, the default scene's stop phase, the walls
+hold) with each setting's creep error against a converged reference (--no-held skips them). `--quick`: traverse 2 s (compressed schedule), walls 1.5 s and a
 reduced set of settings (a few minutes); full: 45 s traverse, 4 s walls, every setting.
 """
 
@@ -32,6 +35,10 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "validation"))
 from validation_scenes import REFERENCE, run, track_error  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import held_cases  # noqa: E402
+from mujoco_anchor import mujoco_rtf  # noqa: E402
 
 
 def _track(result, scene):
@@ -72,14 +79,22 @@ def _patch(contact_type=None, per_ring=None, screw_pairs=None):
 
 def settings(quick: bool):
     out = []
-    I = lambda name, dt, **p: {"label": f"{name} dt={dt:g}" + "".join(f" {k}={v:g}" for k, v in p.items()),  # noqa: E731
-                               "integrator": {"name": name, "params": p}, "dt": dt}
+    I = lambda name, dt, **p: {"label": f"{name} dt={dt:g}" + "".join(  # noqa: E731
+        f" {k}={v:g}" if isinstance(v, (int, float)) else f" {k}={v}" for k, v in p.items()),
+        "integrator": {"name": name, "params": p}, "dt": dt}
     steps = {"rk4": [5e-4, 1e-3, 2e-3] if quick else [5e-4, 1e-3, 2e-3, 4e-3],
              "semi_implicit_euler": [2.5e-4, 5e-4, 1e-3] if quick else [1e-4, 2.5e-4, 5e-4, 1e-3, 2e-3],
              "rosenbrock2": [2e-3] if quick else [1e-3, 2e-3, 5e-3]}
     for name, dts in steps.items():
         for dt in dts:
             out.append(I(name, dt, **({"jacobian_every": 10} if name == "rosenbrock2" else {})))
+    # the linearly implicit step on the components' analytic Jacobians (framework/linearization.py)
+    for dt in ([5e-3, 1e-2] if quick else [2.5e-3, 5e-3, 1e-2]):
+        out.append(I("rosenbrock_w", dt, method="ros2"))
+    for dt in ([1e-2] if quick else [5e-3, 1e-2]):
+        out.append(I("rosenbrock_w", dt, method="ros34pw2"))
+    if not quick:
+        out.append(I("rosenbrock_w", 1e-2, method="ros34pw2", jacobian_every=2))
     for rtol in ([1e-4, 1e-6] if quick else [1e-3, 1e-4, 1e-6, 1e-8]):
         out.append(I("dopri5", 1e-3, rtol=rtol, atol=rtol * 1e-2))
     base = {"integrator": {"name": "rk4", "params": {}}, "dt": 1e-3}
@@ -114,8 +129,17 @@ def measure(scene, sets, horizon, s):
 @click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default="bench/results/tradeoff.png",
               show_default=True, help="Pareto plot (PNG).")
 @click.option("--scene", "only", multiple=True, help="Only these scenes.")
-def main(quick, json_path, plot_path, only):
+@click.option("--held/--no-held", default=True, show_default=True,
+              help="Also the held-robot cases (bench/held_cases.py: slope, stop phase, walls) with creep errors.")
+def main(quick, json_path, plot_path, only, held):
     rows = []
+    mj = {dt: mujoco_rtf(10, dt) for dt in (1e-3, 2e-3)}       # the same run's speed anchor
+    if mj[1e-3] is not None:
+        print(f"MuJoCo screw snake (10 modules, Euler), this run: RTF {mj[1e-3]:.3g} at 1 ms, {mj[2e-3]:.3g} at 2 ms"
+              " (../shared/peers/mujoco_snake.py); 'x MuJoCo' below is RTF / MuJoCo's RTF at 1 ms")
+    else:
+        print("MuJoCo not available (pip install mujoco): no speed ratio")
+    ratio = (lambda rtf: f"{rtf / mj[1e-3]:.2f}") if mj[1e-3] else (lambda rtf: "—")
     for scene, (sets, qh, fh) in SCENES.items():
         if only and scene not in only:
             continue
@@ -128,23 +152,29 @@ def main(quick, json_path, plot_path, only):
         t_ref, p_ref, _ = _track(ref, scene)
         print(f"\n{scene}: {horizon:g} s; reference rk4 dt={REFERENCE['dt']:g}: {ref.summary['stop_reason']}, "
               f"RTF {ref.summary['real_time_factor']:.3g}", flush=True)
-        print("| setting | wall s | RTF | pos err m | yaw err rad | stable | stop |\n|---|---:|---:|---:|---:|---|---|")
+        for name in dict.fromkeys(st["integrator"]["name"] for st in settings(quick)):   # load each one's kernels
+            run(scene, sets, {"duration": 0.05, "dt": 5e-3, "integrator": {"name": name, "params": {}}})
+        print("| setting | wall s | RTF | x MuJoCo | pos err m | yaw err rad | stable | stop |\n"
+              "|---|---:|---:|---:|---:|---:|---|---|")
         for s in settings(quick):
             m = measure(scene, sets, horizon, s)
             row = {"scene": scene, "setting": s["label"], "horizon_s": horizon}
             if "error" in m:
                 row.update(error=m["error"], stable=False)
-                print(f"| {s['label']} | — | — | — | — | build error | {m['error'][:60]} |")
+                print(f"| {s['label']} | — | — | — | — | — | build error | {m['error'][:60]} |")
             else:
                 t, p, yaw = _track(m.pop("result"), scene)
                 row.update(m, **_errors(t, p, yaw, t_ref, p_ref))
                 ye = "—" if row["yaw_err_rad"] is None else f"{row['yaw_err_rad']:.2e}"
-                print(f"| {s['label']} | {row['wall_s']:.2f} | {row['rtf']:.3g} | {row['pos_err_m']:.2e} | {ye} | "
+                print(f"| {s['label']} | {row['wall_s']:.2f} | {row['rtf']:.3g} | {ratio(row['rtf'])} | "
+                      f"{row['pos_err_m']:.2e} | {ye} | "
                       f"{'yes' if row['stable'] else 'NO'} | {row['stop'][:60]} |", flush=True)
             rows.append(row)
+    held_rows = held_cases.main(quick) if held else []
     if json_path:
         Path(json_path).parent.mkdir(parents=True, exist_ok=True)
-        Path(json_path).write_text(json.dumps({"quick": quick, "reference": REFERENCE, "rows": rows}, indent=1) + "\n")
+        Path(json_path).write_text(json.dumps({"quick": quick, "reference": REFERENCE, "mujoco_rtf": mj, "rows": rows,
+                                               "held": held_rows}, indent=1) + "\n")
     if plot_path:
         plot(rows, Path(plot_path))
         print(f"\nwrote {plot_path}")

@@ -46,7 +46,7 @@ from pathlib import Path
 from typing import Literal, Optional
 
 import numpy as np
-from pydantic import Field, ValidationError, ValidationInfo, create_model, field_validator
+from pydantic import ConfigDict, Field, ValidationError, ValidationInfo, create_model, field_validator
 
 from snakesim.framework import ConfigError, Params
 from snakesim.framework.yaml_source import load_yaml
@@ -78,6 +78,9 @@ def _field_problem(field: str, value: float) -> str | None:
 class Material(Params):
     """Contact parameters of one surface material (terrain region); see the module docstring."""
 
+    # finiteness is checked by the validators below, whose messages name the material
+    model_config = ConfigDict(allow_inf_nan=True)
+
     name: str = Field("ice", min_length=1, description="referred to by a terrain's regions")
     k: float = Field(1.0e5, description="N/m, penalty stiffness (eq. 2), > 0")
     c: float = Field(1.0e3, description="N·s/m, penalty damping (eq. 2), ≥ 0")
@@ -90,7 +93,7 @@ class Material(Params):
                                                           "each in [0, 1]")
 
     texture: Literal["none", "checker"] = Field("none", description="procedural albedo pattern for sensors")
-    texture_size: float = Field(0.1, gt=0, description="m, checker square size")
+    texture_size: float = Field(0.1, gt=0, allow_inf_nan=False, description="m, checker square size")
     texture_contrast: float = Field(0.5, ge=0, le=1, description="dark squares reflect albedo·(1 − contrast)")
 
     @field_validator("albedo")

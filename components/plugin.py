@@ -6,44 +6,74 @@ point in the ``snakesim`` group (see docs/plugins.md).
 
 from snakesim.framework import hookimpl
 
-from .contact.friction_fit_cli import snakesim_add_commands  # noqa: F401  (hookimpl: `snakesim fit-friction`)
-from .contact.point_contact import PointContact
-from .contact.hull import HullContact
-from .control.screw_drive import ScrewDrive
-from .contact.screw_sdf import ScrewSdfContact
-from .control import CsvTrajectory, JointPid, JointSetpoints, JointSpringDamper, Schedule, SerpenoidGait
-from .examples.mass_spring import PointMass, SpringDamper
-from .examples.pendulum import Pendulum, ViscousDamper
-from .monitors import MobilityMonitor
-from .monitors.planar_pose import PlanarPose
-from .control.screw_schedule import ScrewSchedule
-from .multibody import Multibody
-from .perception import PERCEPTION
-from .perception.cli import perception_run_options  # noqa: F401  (hookimpl: --lidar, --stereo)
-from .placement import PLACEMENT
-from .terrain import TerrainSource
-from .signals.blocks import Gain, Sum, ZeroOrderHold
-from .signals.sources import Constant, Sine, Step
-from .sensors import ForceTorqueSensors, Imu
-from .tethers import Tethers, WrenchSum
-from .viz import RerunSink
-from .ros2 import Ros2Commands, Ros2Publisher, Ros2SensorBridge, Ros2SimControl, Ros2TetherCommands
-from .ros2.cli import ros2_run_options  # noqa: F401  (hookimpl: --ros2)
-from .ros2.mcap_cli import ros2_mcap_run_options  # noqa: F401  (hookimpl: --ros2-mcap)
-from .ros2.mcap_recorder import Ros2McapRecorder
-from .viz.cli import viz_add_commands, viz_run_options  # noqa: F401  (hookimpls: --viz, `snakesim replay`)
+# Component classes and the command-line hooks load on first use: `snakesim --help` lists the commands
+# without importing a physics module (bench/cli_startup.py).
 
-BUILTIN = (Constant, Step, Sine, Gain, Sum, ZeroOrderHold, Pendulum, ViscousDamper, PointMass, SpringDamper,
-           PointContact, HullContact, TerrainSource, Multibody, ScrewSdfContact, ScrewDrive,
-           JointPid, JointSpringDamper, JointSetpoints, SerpenoidGait, CsvTrajectory, Schedule, ForceTorqueSensors,
-           Imu, Tethers, WrenchSum, MobilityMonitor, RerunSink, PlanarPose, ScrewSchedule, Ros2Publisher, Ros2Commands, Ros2SensorBridge,
-           Ros2SimControl, Ros2McapRecorder, Ros2TetherCommands,
-           *PLACEMENT, *PERCEPTION)
+
+def builtin_components() -> tuple:
+    from .contact.point_contact import PointContact
+    from .contact.hull import HullContact
+    from .control.screw_drive import ScrewDrive
+    from .contact.screw_sdf import ScrewSdfContact
+    from .contact.body_contact import BodyContact
+    from .control import CsvTrajectory, JointPid, JointSetpoints, JointSpringDamper, Schedule, SerpenoidGait
+    from .examples.mass_spring import PointMass, SpringDamper
+    from .examples.pendulum import Pendulum, ViscousDamper
+    from .monitors import MobilityMonitor
+    from .monitors.planar_pose import PlanarPose
+    from .control.screw_schedule import ScrewSchedule
+    from .multibody import Multibody
+    from .perception import PERCEPTION
+    from .placement import PLACEMENT
+    from .terrain import TerrainSource
+    from .signals.blocks import Gain, Sum, ZeroOrderHold
+    from .signals.sources import Constant, Sine, Step
+    from .sensors import ForceTorqueSensors, Imu
+    from .tethers import Tethers, WrenchSum
+    from .viz import RerunSink
+    from .ros2 import Ros2Commands, Ros2Publisher, Ros2SensorBridge, Ros2SimControl, Ros2TetherCommands
+    from .ros2.mcap_recorder import Ros2McapRecorder
+
+    return (Constant, Step, Sine, Gain, Sum, ZeroOrderHold, Pendulum, ViscousDamper, PointMass, SpringDamper,
+            PointContact, HullContact, TerrainSource, Multibody, ScrewSdfContact, BodyContact, ScrewDrive,
+            JointPid, JointSpringDamper, JointSetpoints, SerpenoidGait, CsvTrajectory, Schedule, ForceTorqueSensors,
+            Imu, Tethers, WrenchSum, MobilityMonitor, RerunSink, PlanarPose, ScrewSchedule, Ros2Publisher,
+            Ros2Commands, Ros2SensorBridge, Ros2SimControl, Ros2McapRecorder, Ros2TetherCommands,
+            *PLACEMENT, *PERCEPTION)
+
+
+def __getattr__(name):
+    if name == "BUILTIN":           # the tuple this module used to hold; kept for code that reads it
+        return builtin_components()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+@hookimpl
+def snakesim_add_commands(cli):
+    from snakesim.framework.cli import lazy_command
+
+    cli.add_command(lazy_command("replay", "snakesim.components.viz.cli:replay_command",
+                                 "Turn a finished `snakesim run --out RUN_DIR` folder into a rerun recording."))
+    cli.add_command(lazy_command("fit-friction", "snakesim.components.contact.friction_fit_cli:fit_friction",
+                                 "Fit mu and ||e_v|| from screw drag tests; write a materials file."))
+    cli.add_command(lazy_command("robot", "snakesim.robots.cli:robot",
+                                 "Robot descriptions: write a design's URDF for N modules, with its meshes."))
+
+
+@hookimpl
+def snakesim_run_options():
+    # one group, in the order the options always had: the viewer, ROS 2, its recorder, the sensors
+    from .perception.cli import perception_run_options
+    from .ros2.cli import ros2_run_options
+    from .ros2.mcap_cli import ros2_mcap_run_options
+    from .viz.cli import viz_run_options
+
+    return [*viz_run_options(), *ros2_run_options(), *ros2_mcap_run_options(), *perception_run_options()]
 
 
 @hookimpl
 def snakesim_register_components(registry):
-    for cls in BUILTIN:
+    for cls in builtin_components():
         registry.add_component(cls)
 
 

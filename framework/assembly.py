@@ -29,11 +29,20 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 from .errors import ConfigError
 from .expressions import substitute
 from .layering import TOP_KEYS, deep_merge, merge_layer, set_override
+from .paths import locate_strings
 from .yaml_source import LocatedDict, load_yaml
 
 
 class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+
+
+#: most repetitions of one include or connection (``repeat:``)
+MAX_REPEAT = 10_000
+#: the type each top-level key must have (None is the key's default)
+_TOP_TYPES = {"description": (str, "a string"), "parameters": (dict, "a mapping"), "sim": (dict, "a mapping"),
+              "include": (list, "a list"), "components": (dict, "a mapping"), "connections": (list, "a list"),
+              "record": (list, "a list"), "stop": (list, "a list")}
 
 
 class IntegratorSpec(_Strict):
@@ -75,7 +84,7 @@ class StopSpec(_Strict):
 class IncludeSpec(_Strict):
     assembly: str
     as_: str | None = Field(None, alias="as")
-    repeat: int = Field(1, ge=0)
+    repeat: int = Field(1, ge=0, le=MAX_REPEAT, strict=True)
     params: dict = Field(default_factory=dict)
 
 
@@ -210,9 +219,14 @@ def _expand(data: LocatedDict, scope: dict, prefix: str | None, search_path, bas
     unknown = [k for k in data if k not in TOP_KEYS]
     if unknown:
         k = unknown[0]
-        close = difflib.get_close_matches(k, TOP_KEYS, n=1)
+        close = difflib.get_close_matches(str(k), TOP_KEYS, n=1)
         raise ConfigError(f"unknown top-level key '{k}'" + (f"; did you mean '{close[0]}'?" if close else "")
                           + f" (valid: {', '.join(TOP_KEYS)})", data.where(k), k)
+    for k, (kind, what) in _TOP_TYPES.items():
+        if data.get(k) is not None and not isinstance(data[k], kind):
+            got = next((w for t, w in ((bool, "a boolean"), (int, "a number"), (float, "a number"), (str, "a string"),
+                                       (list, "a list"), (dict, "a mapping")) if isinstance(data[k], t)), "a value")
+            raise ConfigError(f"'{k}' must be {what}, got {got}: {str(data[k])[:60]!r}", data.where(k), k)
 
     # includes first, so the including file can wire and record into them
     includes = data.get("include") or []
@@ -232,7 +246,13 @@ def _expand(data: LocatedDict, scope: dict, prefix: str | None, search_path, bas
                 path = find_assembly(substitute(inc.assembly, iscope), search_path, base_dir)
             except ConfigError as e:
                 raise ConfigError(e.detail, _where_in(raw, ["assembly"]) or where, f"include[{n}].assembly") from None
-            sub = load_yaml(path)
+            sub = locate_strings(load_yaml(path))     # its paths are relative to it
+            if not isinstance(sub, dict):
+                raise ConfigError(f"included assembly {path} is not a YAML mapping (got {type(sub).__name__}); "
+                                  "an assembly maps keys such as components and connections",
+                                  _where_in(raw, ["assembly"]) or where, f"include[{n}].assembly")
+            if not isinstance(sub.get("parameters") or {}, dict):
+                raise ConfigError("'parameters' must be a mapping", sub.where("parameters"), "parameters")
             declared = dict(sub.get("parameters") or {})
             bad = [k for k in params if k not in declared]
             if bad:
@@ -273,8 +293,9 @@ def _expand(data: LocatedDict, scope: dict, prefix: str | None, search_path, bas
             if "connect" not in item or extra:
                 raise ConfigError("a connection mapping has keys 'connect' and optional 'repeat'", where, f"connections[{n}]")
             reps = substitute(item.get("repeat", 1), scope)
-            if not isinstance(reps, int) or reps < 0:
-                raise ConfigError(f"repeat must be a non-negative integer, got {reps!r}", where, f"connections[{n}].repeat")
+            if not isinstance(reps, int) or isinstance(reps, bool) or not 0 <= reps <= MAX_REPEAT:
+                raise ConfigError(f"repeat must be an integer from 0 to {MAX_REPEAT} (the limit), got {reps!r}",
+                                  where, f"connections[{n}].repeat")
             texts = [substitute(item["connect"], dict(scope, i=i)) for i in range(reps)]
         elif isinstance(item, str):
             texts = [substitute(item, scope)]
@@ -323,12 +344,12 @@ def resolve(assembly: str | Path | None, *, search_path=(), config_files=(), ove
     each ``--set`` in order, then ``sim_overrides`` (explicit CLI flags).
     """
     path = find_assembly(str(assembly), search_path)
-    data = load_yaml(path)
+    data = locate_strings(load_yaml(path))       # paths in a file are relative to that file (paths.py)
     if not isinstance(data, dict):
         raise ConfigError("an assembly must be a YAML mapping", str(path))
     declared = data.get("parameters") or {}
     for cf in config_files:
-        layer = load_yaml(cf)
+        layer = locate_strings(load_yaml(cf))
         if not isinstance(layer, dict):
             raise ConfigError("a config file must be a YAML mapping", str(cf))
         bad = [k for k in layer if k not in TOP_KEYS]
@@ -337,7 +358,8 @@ def resolve(assembly: str | Path | None, *, search_path=(), config_files=(), ove
                               layer.where(bad[0]), bad[0])
         data = merge_layer(data, layer)
     for item in overrides:
-        data = merge_layer(data, set_override(item, dict(data.get("parameters") or {})))
+        params_now = data.get("parameters")        # a wrong type is reported by _expand, naming it
+        data = merge_layer(data, set_override(item, dict(params_now) if isinstance(params_now, dict) else {}))
     if sim_overrides:
         flags = LocatedDict({k: v for k, v in sim_overrides.items() if v is not None})
         layer = LocatedDict(sim=flags)
@@ -361,6 +383,9 @@ def resolve(assembly: str | Path | None, *, search_path=(), config_files=(), ove
                               where, f"components.{name}")
         components[name] = _validate(ComponentSpec, raw, lambda loc, raw=raw, w=where: _where_in(raw, loc) or w,
                                      f"components.{name}")
+    if not components:
+        raise ConfigError("the assembly has no components: nothing to simulate (give 'components', or "
+                          "'include' an assembly that has some)", str(path), "components")
     sim_raw = substitute(data.get("sim") or LocatedDict(), dict(parameters))
     sim = _validate(SimSpec, sim_raw, lambda loc: _where_in(sim_raw, loc) or data.where("sim"), "sim")
     return Resolved(sim=sim, parameters=dict(parameters), components=components,

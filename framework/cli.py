@@ -8,6 +8,7 @@ config file. Precedence, later wins: Params defaults < assembly < each
 
 from __future__ import annotations
 
+import importlib
 import json
 import sys
 from pathlib import Path
@@ -15,9 +16,15 @@ from pathlib import Path
 import click
 
 from .errors import SnakesimError
-from .registry import default_registry
-from .assembly import resolve
-from .session import Session
+
+# registry, assembly and session load inside the commands: `snakesim --help` must not pay for
+# numpy, pydantic and every component (bench/cli_startup.py measures it)
+
+
+def default_registry():
+    from .registry import default_registry as registry
+
+    return registry()
 
 
 def _fail(e: Exception):
@@ -36,6 +43,9 @@ def _progress(stream=None):
 
 def _session(assembly, config, sets, extras=None, **sim):
     """Resolve, let plugin run options edit the configuration, build."""
+    from .assembly import resolve
+    from .session import Session
+
     reg = default_registry()
     extras = {k: v for k, v in (extras or {}).items() if v is not None}
     # shorthand options (--robot, --modules, ...) are --set items, placed before the explicit ones
@@ -65,7 +75,52 @@ def scene_options(f):
     return f
 
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+class LazyCommand(click.Command):
+    """A plugin command known by name and one line until it runs: its module (and whatever that module
+    imports) loads only when the command is looked up to run or to show its own help."""
+
+    def __init__(self, name: str, target: str, short_help: str):
+        super().__init__(name, short_help=short_help)
+        self.target = target
+
+    def load(self) -> click.Command:
+        module, attr = self.target.split(":")
+        return getattr(importlib.import_module(module), attr)
+
+
+def lazy_command(name: str, target: str, short_help: str) -> LazyCommand:
+    """For ``snakesim_add_commands``: ``cli.add_command(lazy_command("replay", "pkg.mod:replay", "..."))``."""
+    return LazyCommand(name, target, short_help)
+
+
+class _SnakesimGroup(click.Group):
+    """Installs plugin commands before listing them and plugin options before running one."""
+
+    def list_commands(self, ctx):
+        _install_commands()
+        return super().list_commands(ctx)
+
+    def get_command(self, ctx, name):
+        if name in _TAKE_PLUGIN_OPTIONS:
+            install_plugin_cli()
+        else:
+            _install_commands()
+        cmd = self.commands.get(name)
+        if isinstance(cmd, LazyCommand):
+            cmd = self.commands[name] = cmd.load()
+        return cmd
+
+    def format_commands(self, ctx, formatter):
+        # the one-line help of every command, lazy ones unloaded (click's own would load them all)
+        _install_commands()
+        limit = formatter.width - 6 - max((len(n) for n in self.commands), default=0)
+        rows = [(n, c.get_short_help_str(limit)) for n, c in sorted(self.commands.items()) if not c.hidden]
+        if rows:
+            with formatter.section("Commands"):
+                formatter.write_dl(rows)
+
+
+@click.group(cls=_SnakesimGroup, context_settings={"help_option_names": ["-h", "--help"]})
 def cli():
     """snakesim: a dataflow simulator for snake robots (and anything else built from components)."""
 
@@ -75,7 +130,7 @@ def cli():
 @scene_options
 @click.option("--duration", type=float, callback=_positive, help="Simulated time, s.")
 @click.option("--dt", type=float, callback=_positive, help="Base step, s.")
-@click.option("--integrator", help="semi_implicit_euler, rk4, dopri5, rosenbrock2 or a plugin's.")
+@click.option("--integrator", help="semi_implicit_euler, rk4, dopri5, rosenbrock2, rosenbrock_w or a plugin's.")
 @click.option("--realtime/--no-realtime", default=None, help="Pace simulated time to the wall clock.")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), help="Write signals.csv, summary.json, config.yaml here.")
 @click.option("--save-config", type=click.Path(dir_okay=False), help="Write the full resolved configuration here.")
@@ -171,14 +226,30 @@ def graph(assembly, config, sets, output, **shorthands):
         raise click.BadParameter(f"'{output}': the picture must end in .svg or .png", param_hint="-o")
     try:
         s = _session(assembly, config, sets, shorthands)
+        Path(output).parent.mkdir(parents=True, exist_ok=True)   # -o runs/x.svg: no need to make runs/ first
         draw(s, Path(output))
     except SnakesimError as e:
         _fail(e)
-    click.echo(f"wrote {output}", err=True)
+    click.echo(f"wrote {Path(output).resolve()}", err=True)   # where, whatever folder it ran from
 
 
+_TAKE_PLUGIN_OPTIONS = ("run", "check", "graph")   # commands plugins add options to
 _SHORTHANDS: dict[str, str] = {}   # option name -> --set key
 _RUN_OPTIONS: dict[str, object] = {}  # option name -> apply(resolved, value)
+
+
+def _plugin_manager():
+    from .registry import make_plugin_manager
+
+    return make_plugin_manager()
+
+
+def _install_commands(pm=None) -> None:
+    """Plugins' commands only (what the top-level help lists), once."""
+    if getattr(cli, "_commands_installed", False) or getattr(cli, "_plugins_installed", False):
+        return
+    (pm or _plugin_manager()).hook.snakesim_add_commands(cli=cli)
+    cli._commands_installed = True
 
 
 def install_plugin_cli(registry=None) -> click.Group:
@@ -186,7 +257,8 @@ def install_plugin_cli(registry=None) -> click.Group:
     if getattr(cli, "_plugins_installed", False):
         return cli
     reg = registry or default_registry()
-    reg.pm.hook.snakesim_add_commands(cli=cli)
+    if not getattr(cli, "_commands_installed", False):
+        reg.pm.hook.snakesim_add_commands(cli=cli)
     for group in reg.pm.hook.snakesim_cli_shorthands():
         for option, key, help_text in group:
             name = option.lstrip("-").replace("-", "_")
@@ -205,5 +277,5 @@ def install_plugin_cli(registry=None) -> click.Group:
 
 
 def main():
-    install_plugin_cli()
+    # plugins install on demand (_SnakesimGroup): the top-level help loads only their commands' names
     cli(prog_name="snakesim")

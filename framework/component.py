@@ -25,19 +25,71 @@ Build-time resources (the robot model) are declared with ``Uses`` and
 from __future__ import annotations
 
 import dataclasses
-from typing import ClassVar, Generic, TypeVar
+import types
+from typing import Annotated, Any, ClassVar, Generic, Literal, TypeVar, Union, get_args, get_origin
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict
+from pydantic import BaseModel, ConfigDict, ValidationInfo, field_validator
 
 from .ports import Input, Output
 from .resources import Provides, Uses
 
 
 class Params(BaseModel):
-    """Base of every component's parameters: frozen, unknown keys rejected."""
+    """Base of every component's parameters: frozen, unknown keys rejected, every float finite
+    (NaN and ±inf refused, in nested lists, tuples and dicts too; a nested model is finite when it
+    derives from Params as well) and no boolean where a number is meant (``true`` is not 1).
 
-    model_config = ConfigDict(frozen=True, extra="forbid")
+    A field that really means "unbounded" says so with ``None`` (preferred) or opts in with
+    ``Field(allow_inf_nan=True)``.
+    """
+
+    model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
+
+    @field_validator("*", mode="before")
+    @classmethod
+    def _no_bool_for_number(cls, value, info: ValidationInfo):
+        field = cls.model_fields.get(info.field_name) if info.field_name else None
+        if field is not None:
+            _refuse_bool(field.annotation, value)
+        return value
+
+
+def _refuse_bool(annotation, value) -> None:
+    """Raise when ``value`` holds a bool where ``annotation`` wants a number (pydantic's lax mode
+    reads true as 1): in the value itself or in the items of a list or tuple of numbers."""
+    if isinstance(value, bool):
+        if _wants_number(annotation) and not _admits_bool(annotation):
+            raise ValueError(f"{str(value).lower()} is a boolean; a number is expected here")
+        return
+    if isinstance(value, (list, tuple)) and value:
+        for arg in _members(annotation):
+            origin = get_origin(arg)
+            if origin in (list, tuple, set, frozenset):
+                items = [a for a in get_args(arg) if a is not Ellipsis]
+                if items and all(_wants_number(a) and not _admits_bool(a) for a in items):
+                    for i, v in enumerate(value):
+                        if isinstance(v, bool):
+                            raise ValueError(f"item {i} is {str(v).lower()}, a boolean; a number is expected here")
+                    return
+
+
+def _members(annotation) -> tuple:
+    """The members of a union (``X | None``), or the annotation itself (Annotated unwrapped)."""
+    if get_origin(annotation) is Annotated:
+        return _members(get_args(annotation)[0])
+    if get_origin(annotation) in (Union, types.UnionType):
+        return tuple(m for a in get_args(annotation) for m in _members(a))
+    return (annotation,)
+
+
+def _wants_number(annotation) -> bool:
+    return any(m in (int, float) for m in _members(annotation))
+
+
+def _admits_bool(annotation) -> bool:
+    return any(m is bool or m is Any or (get_origin(m) is Literal and any(isinstance(a, bool) for a in get_args(m)))
+               for m in _members(annotation))
 
 
 P = TypeVar("P", bound=BaseModel)
@@ -231,6 +283,23 @@ class Component(Generic[P]):
         step's start (Munthe-Kaas RK); on a non-commutative manifold (SE(3))
         they keep their order only with this correction. Identity by default.
         """
+
+    # -- derivatives for linearly implicit integrators (all optional; see framework/linearization.py) ----
+    def port_jacobian(self, port: str, t: float, x, u, y):
+        """The derivative of output ``port`` w.r.t. this component's state and inputs at its last
+        evaluation: a :class:`~.linearization.Selection`, an :class:`~.linearization.Elementwise`,
+        an object its reader understands, or None (undeclared: left out of the Jacobian)."""
+        return None
+
+    def state_jacobian(self, t: float, x, u, y):
+        """First-order continuous state: an :class:`~.linearization.Elementwise` over dx/dt (rows)
+        and the inputs / own state (``"x"``), or None (undeclared)."""
+        return None
+
+    def mechanical_jacobian(self, t: float, x, u, y, lin):
+        """Second-order continuous state [q, v]: a :class:`~.linearization.Mechanical` block (mass
+        matrix and generalised-force derivatives), asking ``lin`` for its inputs' derivatives."""
+        return None
 
     def build_report(self) -> dict | None:
         """Extra facts for ``snakesim check`` (e.g. a model optimisation); may be costly, asked on demand."""

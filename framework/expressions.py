@@ -9,6 +9,10 @@ types are walked; anything else is an error naming the template.
 A string that is exactly one template keeps the value's type (``"${k}"`` ->
 2.5); templates inside a longer string are formatted into it (``seg${i}``).
 A format spec after a colon pads systematic names: ``module_${n-1:02d}``.
+
+Bounded: a format spec's width and precision are at most :data:`MAX_FORMAT_WIDTH`, a
+formatted string at most :data:`MAX_STRING` characters, an integer result at most
+:data:`MAX_INT_DIGITS` digits; beyond them the template is refused, naming the limit.
 """
 
 from __future__ import annotations
@@ -21,6 +25,14 @@ import re
 from .errors import ConfigError
 
 _TEMPLATE = re.compile(r"\$\{([^}]*)\}")
+#: widest format spec (``${i:0100d}``), characters
+MAX_FORMAT_WIDTH = 100
+#: longest string a template may format into, characters
+MAX_STRING = 100_000
+#: longest expression inside one ``${...}``, characters
+MAX_EXPRESSION = 500
+#: most digits of an integer a template computes
+MAX_INT_DIGITS = 30
 _BINOPS = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul,
            ast.Div: operator.truediv, ast.FloorDiv: operator.floordiv, ast.Mod: operator.mod}
 
@@ -47,7 +59,7 @@ def _eval(node, scope, expr):
     if isinstance(node, ast.BinOp) and type(node.op) in _BINOPS:
         a, b = _number(_eval(node.left, scope, expr), expr), _number(_eval(node.right, scope, expr), expr)
         try:
-            return _BINOPS[type(node.op)](a, b)
+            return _bounded(_BINOPS[type(node.op)](a, b), expr)
         except ZeroDivisionError:
             raise ConfigError(f"'${{{expr}}}': division by zero") from None
     if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
@@ -72,15 +84,29 @@ def evaluate(expr: str, scope: dict):
     if m and m.group("spec"):
         # ${i+1:02d}: a Python format spec on the result, for zero-padded systematic names
         value = evaluate(m.group("expr"), scope)
+        sizes = [int(x) for x in re.findall(r"\d+", m.group("spec"))]
+        if any(x > MAX_FORMAT_WIDTH for x in sizes):
+            raise ConfigError(f"'${{{expr}}}': format '{m.group('spec')}' is wider than {MAX_FORMAT_WIDTH} "
+                              "characters (the limit)")
         try:
             return format(value, m.group("spec"))
         except (ValueError, TypeError):
             raise ConfigError(f"'${{{expr}}}': format '{m.group('spec')}' does not apply to {value!r}") from None
+    if len(expr) > MAX_EXPRESSION:
+        raise ConfigError(f"'${{{expr[:40]}...}}': an expression longer than {MAX_EXPRESSION} characters (the limit)")
     try:
         tree = ast.parse(expr.strip(), mode="eval")
-    except SyntaxError:
-        raise ConfigError(f"'${{{expr}}}' is not a valid expression") from None
-    return _eval(tree, scope, expr)
+        return _bounded(_eval(tree, scope, expr), expr)
+    except (SyntaxError, RecursionError, MemoryError):
+        raise ConfigError(f"'${{{expr}}}' is not a valid expression (or nests too deeply)") from None
+
+
+def _bounded(v, expr: str):
+    """Integers beyond :data:`MAX_INT_DIGITS` digits are refused (they cannot even be printed past
+    Python's 4300-digit limit); every other value passes."""
+    if isinstance(v, int) and not isinstance(v, bool) and abs(v) >= 10 ** MAX_INT_DIGITS:
+        raise ConfigError(f"'${{{expr}}}': the result has more than {MAX_INT_DIGITS} digits (the limit)")
+    return v
 
 
 def substitute(value, scope: dict):
@@ -91,7 +117,7 @@ def substitute(value, scope: dict):
             return evaluate(m.group(1), scope)
         if "${" not in value:
             return value
-        return _TEMPLATE.sub(lambda mm: _format(evaluate(mm.group(1), scope)), value)
+        return _format_into(value, scope)
     if isinstance(value, dict):
         out = type(value)()
         _copy_position(value, out)
@@ -127,6 +153,20 @@ def _located(container, key):
 def _copy_position(src, dst) -> None:
     if hasattr(src, "file") and hasattr(dst, "__dict__"):
         dst.__dict__.update(src.__dict__)
+
+
+def _format_into(text: str, scope: dict) -> str:
+    """``text`` with each template formatted in; refused past :data:`MAX_STRING` characters."""
+    parts, size, at = [], 0, 0
+    for m in _TEMPLATE.finditer(text):
+        piece = _format(evaluate(m.group(1), scope))
+        parts += [text[at:m.start()], piece]
+        size += m.start() - at + len(piece)
+        at = m.end()
+        if size > MAX_STRING:
+            raise ConfigError(f"'{text[:40]}...' formats into more than {MAX_STRING:,} characters (the limit)")
+    parts.append(text[at:])
+    return "".join(parts)
 
 
 def _format(v) -> str:

@@ -48,6 +48,11 @@ def merge_layer(base, over):
         if isinstance(old, dict) and over_sim["integrator"].get("name", old.get("name")) != old.get("name"):
             old = {}
         base = _with(base, "sim", _with(sim, "integrator", old))
+    elif isinstance(sim, dict) and isinstance(over_sim, dict) and isinstance(over_sim.get("integrator"), str) \
+            and isinstance(sim.get("integrator"), dict) and sim["integrator"].get("name") in (None, over_sim["integrator"]):
+        # a bare name over params given for that integrator (or for whichever one is chosen, by --set
+        # sim.integrator.params.X): the params stay; a different integrator's params are replaced
+        over = _with(over, "sim", _with(over_sim, "integrator", {"name": over_sim["integrator"]}))
     return deep_merge(base, over)
 
 

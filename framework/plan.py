@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from pydantic import ValidationError
 
+from .paths import absolute_paths
 from .assembly import Resolved
 from .binding import Cell, make_namespace, set_cache
 from .component import Component, StopFlag
@@ -88,6 +89,7 @@ class Plan:
     report: dict = field(default_factory=dict)
     holds: tuple[tuple, ...] = ()                 # (component.hold, its inputs): gates called every base step
     edits: tuple[tuple, ...] = ()                 # (component.edit_state, its inputs): state-edit requesters
+    io: dict = field(default_factory=dict)        # component -> (state view, inputs, outputs): for Jacobians
 
     # -- the continuous system the integrators see ------------------------------
     @property
@@ -183,11 +185,13 @@ def _instantiate(resolved: Resolved, registry) -> tuple[dict[str, Component], di
     for name in order:
         spec, cls, where = resolved.components[name], classes[name], resolved.where.get(name)
         try:
-            built[name] = cls(name, spec.params, spec.rate, uses=resolve_uses(binding[name], built))
+            # relative file paths become absolute, from the file that named them (paths.py)
+            built[name] = cls(name, absolute_paths(cls.Params, spec.params), spec.rate,
+                              uses=resolve_uses(binding[name], built))
         except ValidationError as e:
             err = e.errors()[0]
             loc = ".".join(str(p) for p in err["loc"])
-            msg = err["msg"]
+            msg = err["msg"].removeprefix("Value error, ")
             if err["type"] == "extra_forbidden":
                 msg = f"unknown parameter; {cls.__name__} takes: {', '.join(cls.Params.model_fields) or 'none'}"
             elif not isinstance(err.get("input"), (dict, list)):
@@ -561,4 +565,4 @@ def build(resolved: Resolved, registry) -> Plan:
                 once=once, n_phases=n_phases, X=X, DX=DX, XD=XD, slices=tuple(slices), dslices=dslices,
                 n_euclid_x=n_euclid, stop_flag=stop_flag, dt=dt, record_refs=tuple(recorded),
                 record_every=record_every, stops=stops, used=used, caches=caches, report=report, holds=holds,
-                edits=edits)
+                edits=edits, io={n: (x_of.get(n, xd_of.get(n)), u_of[n], y_of[n]) for n in comps})

@@ -3,10 +3,30 @@
 from __future__ import annotations
 
 import inspect
+import types
+import typing
 
 
 def _signal(port) -> str:
     return port.describe() + (f" (role: {port.role})" if port.role else "")
+
+
+def type_name(annotation) -> str:
+    """A parameter's type as a reader wants it: a ``Literal``'s choices spelled out, unions joined by ``|``."""
+    origin, args = typing.get_origin(annotation), typing.get_args(annotation)
+    if origin is typing.Literal:
+        return "one of " + ", ".join(repr(a) for a in args)
+    if origin in (typing.Union, types.UnionType):
+        return " | ".join(type_name(a) for a in args)
+    if origin is typing.Annotated:
+        return type_name(args[0])
+    if args:
+        return f"{getattr(origin, '__name__', str(origin))}[{', '.join(type_name(a) for a in args)}]"
+    if annotation is type(None):
+        return "None"
+    if annotation is Ellipsis:
+        return "..."
+    return getattr(annotation, "__name__", str(annotation))
 
 
 def component_reference(registry) -> dict:
@@ -22,11 +42,12 @@ def component_reference(registry) -> dict:
             default = "(required)" if f.is_required() else f.get_default(call_default_factory=True)
             if hasattr(default, "model_dump"):      # a nested parameter model (e.g. a Material)
                 default = default.model_dump(mode="json")
-            params.append({"name": pname, "type": getattr(f.annotation, "__name__", str(f.annotation)),
+            params.append({"name": pname, "type": type_name(f.annotation),
                            "default": default, "description": f.description or ""})
         out[name] = {
             "class": cls.__qualname__, "module": cls.__module__,
-            "summary": doc.strip().splitlines()[0] if doc.strip() else "",
+            "summary": doc.strip().split("\n\n")[0].replace("\n", " ") if doc.strip() else "",
+            "doc": doc.strip(),
             "inputs": [{"name": n, "signal": _signal(p), "required": p.required, "doc": p.doc}
                        for n, p in cls.inputs.items()],
             "outputs": [{"name": n, "signal": _signal(p),
@@ -50,7 +71,11 @@ def reference_markdown(ref: dict) -> str:
     lines = ["# Component reference", "",
              "Generated from the registry by `snakesim components --markdown`; do not edit by hand.", ""]
     for name, c in ref.items():
-        lines += [f"## `{name}`", "", c["summary"], "", f"`{c['module']}.{c['class']}`", ""]
+        lines += [f"## `{name}`", "", c["summary"], ""]
+        rest = c["doc"].split("\n\n", 1)[1].strip("\n") if "\n\n" in c["doc"] else ""
+        if rest:     # the whole docstring, as written: port layouts and equations keep their columns
+            lines += ["```text", rest, "```", ""]
+        lines += [f"`{c['module']}.{c['class']}`", ""]
         for r in c["provides"]:
             lines += [f"Provides `{r['name']}`: {r['kind']}" + (f" ({r['doc']})" if r["doc"] else "") + ".", ""]
         for r in c["uses"]:

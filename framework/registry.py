@@ -5,18 +5,23 @@ built-in plugins, load third-party entry points, then ask every plugin to
 register. Built-ins enter exactly as a third party does: they are entry points
 of the ``snakesim`` group (pyproject.toml), distinguished only by belonging to
 the ``snakesim`` distribution, and use the same hooks.
+
+A third-party plugin that fails (to import, to register with pluggy, or in its
+registration hooks) is reported by name on stderr and left out; the rest load. Two
+plugins registering one component or integrator name is an error only where that name
+is used, and the error names both.
 """
 
 from __future__ import annotations
 
 import difflib
+import sys
 from functools import lru_cache
 from importlib.metadata import entry_points
 
 import pluggy
 
 from . import hookspecs
-from .component import Component
 from .errors import RegistryError
 
 ENTRY_POINT_GROUP = "snakesim"
@@ -35,29 +40,58 @@ class Registry:
         self.integrators: dict[str, type] = {}
         self.origins: dict[str, str] = {}
         self.pm = plugin_manager
+        #: name -> the clashing registrations ("plugin: module.Class"), for names two plugins registered
+        self.clashes: dict[str, list[str]] = {}
+        #: the plugin whose registration hook is running (None: a direct call, which raises on a clash)
+        self.current_plugin: str | None = None
+
+    def _clash(self, kind: str, table: dict, name: str, cls) -> None:
+        old = table[name]
+        first = f"{self.origins.get(f'{kind}:{name}', '?')}: {old.__module__}.{old.__qualname__}"
+        second = f"{self.current_plugin or '?'}: {cls.__module__}.{cls.__qualname__}"
+        if self.current_plugin is None:
+            raise RegistryError(f"{kind} '{name}' registered twice: {old.__module__}.{old.__qualname__} "
+                                f"and {cls.__module__}.{cls.__qualname__}")
+        self.clashes[f"{kind}:{name}"] = [first, second]
+        del table[name]              # used anywhere, the name is an error naming both
 
     # -- filled by hooks --------------------------------------------------------
     def add_component(self, cls: type[Component], name: str | None = None) -> None:
+        from .component import Component     # here, not at the top: the CLI's help needs no numpy
+
         if not (isinstance(cls, type) and issubclass(cls, Component)):
             raise RegistryError(f"{cls!r} is not a snakesim Component subclass")
         name = name or cls.type_name or _snake(cls.__name__)
+        if f"component type:{name}" in self.clashes:
+            self.clashes[f"component type:{name}"].append(f"{self.current_plugin}: {cls.__module__}.{cls.__qualname__}")
+            return
         if name in self.components and self.components[name] is not cls:
-            old = self.components[name]
-            raise RegistryError(
-                f"component type '{name}' registered twice: {old.__module__}.{old.__qualname__} "
-                f"and {cls.__module__}.{cls.__qualname__}")
+            self._clash("component type", self.components, name, cls)
+            return
         if not cls.type_name:
             cls.type_name = name
         self.components[name] = cls
+        self.origins[f"component type:{name}"] = self.current_plugin or "?"
 
     def add_integrator(self, cls: type, name: str | None = None) -> None:
         name = name or cls.name
+        if f"integrator:{name}" in self.clashes:
+            return
         if name in self.integrators and self.integrators[name] is not cls:
-            raise RegistryError(f"integrator '{name}' registered twice")
+            self._clash("integrator", self.integrators, name, cls)
+            return
         self.integrators[name] = cls
+        self.origins[f"integrator:{name}"] = self.current_plugin or "?"
+
+    def _clashed(self, kind: str, name: str) -> None:
+        both = self.clashes.get(f"{kind}:{name}")
+        if both:
+            raise RegistryError(f"{kind} '{name}' is registered by more than one plugin ({'; '.join(both)}): "
+                                "the name is ambiguous; uninstall or rename one of them")
 
     # -- look-ups -----------------------------------------------------------------
     def component(self, name: str) -> type[Component]:
+        self._clashed("component type", name)
         try:
             return self.components[name]
         except KeyError:
@@ -65,6 +99,7 @@ class Registry:
                                 f"(`snakesim components` lists all {len(self.components)})") from None
 
     def integrator(self, name: str) -> type:
+        self._clashed("integrator", name)
         try:
             return self.integrators[name]
         except KeyError:
@@ -115,16 +150,58 @@ def make_plugin_manager(load_entry_points: bool = True) -> pluggy.PluginManager:
         name = ep.name if _is_builtin(ep) else f"{ep.dist.name if ep.dist else '?'}:{ep.name}"
         if not (_is_builtin(ep) or load_entry_points) or pm.get_plugin(name) is not None:
             continue
-        pm.register(ep.load(), name=name)
-    pm.check_pending()
+        if _is_builtin(ep):
+            pm.register(ep.load(), name=name)
+            continue
+        try:
+            pm.register(ep.load(), name=name)
+        except Exception as e:       # noqa: BLE001 -- any failure of a third party's code
+            _broken_plugin(name, f"failed to load ({ep.value})", e)
+    try:
+        pm.check_pending()
+    except pluggy.PluginValidationError as e:
+        bad = getattr(e, "plugin", None)
+        bad_name = pm.get_name(bad) if bad is not None else "?"
+        if bad is None or bad_name in {ep.name for ep in eps if _is_builtin(ep)}:
+            raise
+        pm.unregister(bad)
+        _broken_plugin(bad_name, "implements a hook snakesim does not have", e)
+        pm.check_pending()
     return pm
+
+
+#: third-party plugins reported broken in this process (each is reported once)
+BROKEN_PLUGINS: dict[str, str] = {}
+
+
+def _broken_plugin(name: str, what: str, error: BaseException) -> None:
+    message = f"plugin '{name}' {what}: {type(error).__name__}: {error}"
+    if name not in BROKEN_PLUGINS:
+        print(f"snakesim: warning: {message}; going on without it", file=sys.stderr)
+    BROKEN_PLUGINS[name] = message
+
+
+def _register_each(pm: pluggy.PluginManager, hook_name: str, reg: Registry) -> None:
+    """Call one registration hook plugin by plugin (pluggy's order), so a third-party plugin that
+    raises is reported by name and left out while the others register."""
+    builtins = {ep.name for ep in entry_points(group=ENTRY_POINT_GROUP) if _is_builtin(ep)}
+    for impl in reversed(getattr(pm.hook, hook_name).get_hookimpls()):
+        reg.current_plugin = impl.plugin_name
+        try:
+            impl.function(**{a: reg for a in impl.argnames})
+        except Exception as e:       # noqa: BLE001
+            if impl.plugin_name in builtins:
+                raise
+            _broken_plugin(impl.plugin_name, f"failed in {hook_name}", e)
+        finally:
+            reg.current_plugin = None
 
 
 def build_registry(load_entry_points: bool = True) -> Registry:
     pm = make_plugin_manager(load_entry_points)
     reg = Registry(pm)
-    pm.hook.snakesim_register_components(registry=reg)
-    pm.hook.snakesim_register_integrators(registry=reg)
+    _register_each(pm, "snakesim_register_components", reg)
+    _register_each(pm, "snakesim_register_integrators", reg)
     return reg
 
 

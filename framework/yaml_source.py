@@ -3,6 +3,10 @@
 Mappings load as :class:`LocatedDict` (a plain dict plus ``file`` and the line
 of each key), so a schema error deep inside an assembly can still be reported
 as ``scene.yaml:14: components.pend.params.length``. Only safe YAML tags.
+
+Bounded: a file is UTF-8 text (a binary or otherwise encoded file is refused naming the byte
+offset), nests at most :data:`MAX_DEPTH` collections deep, and expands (aliases counted at every
+use) to at most :data:`MAX_NODES` nodes, so an alias bomb is refused before it is built.
 """
 
 from __future__ import annotations
@@ -52,8 +56,54 @@ class LocatedList(list):
         return f"{self.file}:{line}" if line else self.file
 
 
+#: deepest nesting of mappings and lists in one YAML document
+MAX_DEPTH = 64
+#: most nodes a document may expand to, each alias counted at every place it is used
+MAX_NODES = 1_000_000
+
+
 class _Loader(yaml.SafeLoader):
-    pass
+    _depth = 0
+
+    def compose_node(self, parent, index):
+        # the composer recurses once per level: refuse before Python's recursion limit does
+        self._depth += 1
+        try:
+            if self._depth > MAX_DEPTH:
+                mark = self.peek_event().start_mark
+                raise ConfigError(f"YAML nests more than {MAX_DEPTH} levels deep (the limit)",
+                                  f"{self.source_name}:{mark.line + 1}")
+            return super().compose_node(parent, index)
+        finally:
+            self._depth -= 1
+
+
+def _expanded_size(node, source: str) -> int:
+    """Nodes the document becomes once every alias is expanded (memoised per node: linear time);
+    a recursive alias (a node inside itself) is refused."""
+    sizes: dict[int, int] = {}
+    active: set[int] = set()
+
+    def size(n) -> int:
+        key = id(n)
+        if key in sizes:
+            return sizes[key]
+        if key in active:
+            raise ConfigError("recursive YAML alias (a node that contains itself)", f"{source}:{n.start_mark.line + 1}")
+        active.add(key)
+        total = 1
+        if isinstance(n, yaml.MappingNode):
+            total += sum(size(k) + size(v) for k, v in n.value)
+        elif isinstance(n, yaml.SequenceNode):
+            total += sum(size(v) for v in n.value)
+        active.discard(key)
+        if total > MAX_NODES:
+            raise ConfigError(f"YAML expands to more than {MAX_NODES:,} nodes (the limit; aliases count at "
+                              "every use: an alias bomb?)", f"{source}:{n.start_mark.line + 1}")
+        sizes[key] = total
+        return total
+
+    return size(node)
 
 
 def _construct_mapping(loader: _Loader, node: yaml.MappingNode):
@@ -91,26 +141,56 @@ _Loader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_SEQUENCE_TAG, _constr
 
 
 def load_yaml_text(text: str, source: str):
-    loader = _Loader(text)
+    try:
+        loader = _Loader(text)
+    except yaml.reader.ReaderError as e:      # the reader checks every character up front
+        raise _unreadable(e, text, source) from None
     loader.source_name = source
     try:
-        return loader.get_single_data()
+        node = loader.get_single_node()
+        if node is None:
+            return None
+        _expanded_size(node, source)
+        return loader.construct_document(node)
     except yaml.MarkedYAMLError as e:
         mark = e.problem_mark or e.context_mark
         where = f"{source}:{mark.line + 1}" if mark else source
         raise ConfigError(f"invalid YAML: {e.problem or e.context}", where) from None
+    except yaml.reader.ReaderError as e:
+        raise _unreadable(e, text, source) from None
+    except yaml.YAMLError as e:
+        raise ConfigError(f"invalid YAML: {e}", source) from None
+    except RecursionError:
+        raise ConfigError(f"YAML nests too deeply to read (limit {MAX_DEPTH} levels)", source) from None
+    except ValueError as e:          # a scalar Python cannot hold, e.g. an integer of more than 4300 digits
+        raise ConfigError(f"invalid YAML value: {e}", source) from None
     finally:
         loader.dispose()
+
+
+def _unreadable(e, text: str, source: str) -> ConfigError:
+    char = e.character if isinstance(e.character, str) else chr(e.character)
+    offset = len(text[:e.position].encode("utf-8", "surrogatepass"))
+    line = text.count("\n", 0, e.position) + 1
+    return ConfigError(f"character U+{ord(char):04X} at byte offset {offset} is not allowed in YAML text "
+                       "(control characters: a binary file?)", f"{source}:{line}")
 
 
 def load_yaml(path: str | Path):
     path = Path(path)
     try:
-        text = path.read_text()
+        raw = path.read_bytes()
     except FileNotFoundError:
         raise ConfigError("file not found", str(path)) from None
     except IsADirectoryError:
         raise ConfigError("is a folder, expected a YAML file", str(path)) from None
+    except OSError as e:
+        raise ConfigError(f"cannot read the file: {e.strerror or e}", str(path)) from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as e:
+        raise ConfigError(f"not UTF-8 text: byte 0x{raw[e.start]:02x} at byte offset {e.start} ({e.reason}); "
+                          "a YAML file is UTF-8 text (a binary file?)", str(path)) from None
     data = load_yaml_text(text, str(path))
     return LocatedDict() if data is None else data
 

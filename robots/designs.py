@@ -81,10 +81,15 @@ from __future__ import annotations
 
 import difflib
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Literal, Mapping
 
 ScrewLayout = Literal["pair", "front", "none"]
+
+#: A geared actuator's reflected inertia J_m·N² and peak torque T_m·N scale together:
+#: J/T = (J_m/T_m)·N ≈ 2e-3 s² for harmonic-drive bend/twist actuators (BLDC J_m/T_m ~ 2e-5 s²,
+#: N ~ 100) and hobby servos alike, less for the lower-ratio screw drives. kg·m² per N·m of effort.
+GEARED_ARMATURE_PER_EFFORT = {"bend": 2e-3, "twist": 2e-3, "screw": 7e-4, "other": 1e-3}
 BendAxes = Literal["pitch", "alternating"]
 HeadKind = Literal["perception", "cap", "none"]
 
@@ -157,6 +162,11 @@ class Design:
     dimensions: Dimensions
     masses: Masses
     limits: ActuatorLimits
+    #: reflected rotor inertia per joint kind (bend, twist, screw, other), kg·m² per N·m of the joint's
+    #: effort limit: a URDF has no armature, so the design says what its geared joints carry. The
+    #: multibody uses it unless the scene sets ``armature`` / ``armature_per_effort``; `snakesim check`
+    #: prints the values and where each came from.
+    armature_per_effort: Mapping[str, float] = field(default_factory=lambda: dict(GEARED_ARMATURE_PER_EFFORT))
 
     @property
     def has_screws(self) -> bool:

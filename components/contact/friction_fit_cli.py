@@ -80,11 +80,13 @@ def fit_friction(data, plot_path, out_path, material, k, c, base):
                          "given with --c" if c is not None else origin,
                          Path(out_path).name if out_path else "FILE.yaml")
     if out_path:
+        Path(out_path).parent.mkdir(parents=True, exist_ok=True)
         Path(out_path).write_text(text)
         click.echo(f"wrote {out_path} (include it from a terrain file: materials: [{{include: {Path(out_path).name}}}])")
     else:
         click.echo("\n" + text, nl=False)
     if plot_path:
+        Path(plot_path).parent.mkdir(parents=True, exist_ok=True)
         plot_fit(fit, plot_path)
         click.echo(f"wrote {plot_path}")
 

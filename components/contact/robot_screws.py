@@ -92,7 +92,9 @@ def screw_layout(robot: RobotModel) -> ScrewLayout:
     screws = meta["screws"] or []
     if not screws:
         raise RobotScrewError(f"design '{robot.design or robot.label}' has no screws (metadata 'screws' is empty): "
-                              "nothing for screw contact to sample; use a screw-propelled design")
+                              "nothing for screw contact to sample; use a screw-propelled design, or run the "
+                              "design in a scene without screws: mini-eels-crawl, eels-lateral-undulation, "
+                              "eels-sidewinding (shape gaits on body_contact)")
     tree = robot.tree
     cols = {k: [] for k in ("parent_row", "screw_row", "mount_R", "mount_p", "radius", "length", "lead_angle",
                             "hand", "spin_dof", "spin_mult")}

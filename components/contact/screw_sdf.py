@@ -124,6 +124,7 @@ class ScrewSdfContact(Component[ScrewSdfContactParams]):
         radial_B = np.ascontiguousarray(np.concatenate([s.radial for s in samples]))
         counts = np.array([len(s) for s in samples], dtype=np.int64)
         self.n_samples = int(counts.sum())
+        self._axis_B = np.ascontiguousarray(lay.mount_R[:, :, 0])
         self._sphere_r = np.sqrt(lay.radius ** 2 + (0.5 * lay.length) ** 2) + p.margin
         self._samples = Samples(
             broad_phase=p.broad_phase, sphere_r=self._sphere_r,
@@ -154,6 +155,24 @@ class ScrewSdfContact(Component[ScrewSdfContactParams]):
             c.use_terrain(self, u.terrain)
         c.step()
 
+    def port_jacobian(self, port, t, x, u, y):
+        """∂wrenches/∂(screw link twist, displacement): per screw link 6×6 blocks from the last
+        evaluation's contacts (jacobian_kernels.py), for linearly implicit integrators."""
+        from snakesim.components.multibody.linearization import LinkWrenchJacobian
+        from .jacobian_kernels import contact_jacobian_blocks
+        c = u.cache
+        if port != "wrenches" or c.terrain is _UNSET:
+            return None
+        lay, p = self.screws, self.p
+        if c.jac is None:
+            c.jac = (np.zeros((lay.nl, 6, 6)), np.zeros((lay.nl, 6, 6)), np.zeros(lay.nl, dtype=np.bool_))
+        d_twist, d_pose, on = c.jac
+        contact_jacobian_blocks(int(c.counts[4]), c.distance, c.normal, c.material, c.owner, c.point, c.vel,
+                                u.link_poses, self._axis_B, lay.screw_row, lay.parent_row, lay.lead_angle, lay.hand,
+                                c.mats, p.v_eps, MODES[p.regularisation], p.ev_floor, d_twist, d_pose, on)
+        return LinkWrenchJacobian(rows=np.flatnonzero(on), d_twist=d_twist, d_pose=d_pose,
+                                  inputs=("link_poses", "link_velocities", "joint_v"))
+
     def calc_contact_set(self, t, x, u, y):
         c = u.cache
         if u.terrain is not c.terrain:
@@ -181,11 +200,12 @@ class _Cache:
 
     __slots__ = ("comp", "terrain", "mats", "surface", "step", "step_scratch", "work", "ports", "scratch_ports", "seen",
                  "centres_call", "sample_call", "counts", "active", "centres", "points", "distance", "normal",
-                 "material", "sample", "owner", "point", "vel", "force", "fn")
+                 "material", "sample", "owner", "point", "vel", "force", "fn", "jac")
 
     def __init__(self, comp: ScrewSdfContact, u, y):
         lay, n = comp.screws, comp.n_samples
         self.comp = comp
+        self.jac = None                                            # port_jacobian's blocks, made on first use
         self.terrain = _UNSET                                      # not even None: output() checks it first
         self.mats = self.surface = self.step = self.step_scratch = None
         self.active = np.arange(lay.ns, dtype=np.int64)           # every screw, unless the broad phase says

@@ -48,7 +48,7 @@ from __future__ import annotations
 from typing import Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import ConfigDict, Field
 
 from snakesim.components.multibody.robot_model import JOINT_KINDS, RobotModel
 from snakesim.framework import Component, ContinuousState, Input, Output, Params, Uses
@@ -69,7 +69,7 @@ DEFAULT_GAINS = {
 }
 
 
-class JointGains(BaseModel):
+class JointGains(Params):
     """Gains of one joint (or a pattern of joints); unset fields fall back (see module docstring)."""
 
     model_config = ConfigDict(frozen=True, extra="forbid")
@@ -195,6 +195,63 @@ class JointPid(Component[JointPidParams]):
         xd[n:2 * n] = c.zrate
         xd[2 * n] = 1.0
 
+    # -- derivatives for linearly implicit integrators (framework/linearization.py) ------------------
+    def port_jacobian(self, port, t, x, u, y):
+        """∂tau/∂(q, v, setpoint, rate_ref, tau_ff, I, z) of the continuous law, joint by joint; zero
+        on saturated joints. The discrete form's output is held between ticks: no dependence.
+        The same object is returned while no joint enters or leaves saturation."""
+        if port != "tau":
+            return None
+        c = u.cache
+        live = np.abs(y.tau) < self._tmax                  # saturated joints pass nothing on
+        if c.jac_tau is None or not np.array_equal(c.jac_tau[0], live):
+            c.jac_tau = (live, self._tau_jacobian(live))
+        return c.jac_tau[1]
+
+    def _tau_jacobian(self, live):
+        from snakesim.framework.linearization import Elementwise
+        n = self._nj
+        rows = np.arange(n)
+        if self._discrete:
+            return Elementwise(n, ())
+        pos, vel = self._pos & live, self._vel & live
+        kp, ki, kd, itf = self._kp, self._ki, self._kd, self._inv_tf
+        filt = self._tf > 0
+        d_e = np.where(pos, kp, np.where(vel, kp + kd * itf, 0.0))      # ∂tau/∂setpoint
+        d_v = np.where(vel, -kp - kd * itf, np.where(pos & ~filt, -kd, 0.0))
+        d_z = np.where(vel, -kd * itf, np.where(pos & filt, kd, 0.0))
+        return Elementwise(n, (
+            ("q", rows, rows, np.where(pos, -kp, 0.0)), ("v", rows, rows, d_v),
+            ("setpoint", rows, rows, d_e), ("rate_ref", rows, rows, np.where(pos & ~filt, kd, 0.0)),
+            ("tau_ff", rows, rows, live.astype(float)),
+            ("x", rows, rows, np.where(live, ki, 0.0)), ("x", rows, n + rows, d_z)))
+
+    def state_jacobian(self, t, x, u, y):
+        """İ = e (0 while clamped) and ż = (r − z)/tf or (e − z)/tf: rows [I, z], per joint. The same
+        object is returned while no integral is clamped or released."""
+        if self._discrete:
+            return None
+        c = u.cache
+        held = (c.dint == 0.0) & (y.error != 0.0)         # clamped integrals do not move
+        if c.jac_state is None or not np.array_equal(c.jac_state[0], held):
+            c.jac_state = (held, self._state_jacobian(held))
+        return c.jac_state[1]
+
+    def _state_jacobian(self, held):
+        from snakesim.framework.linearization import Elementwise
+        n = self._nj
+        rows = np.arange(n)
+        pos, vel = self._pos, self._vel
+        itf = self._inv_tf
+        return Elementwise(2 * n, (
+            ("q", rows, rows, np.where(pos & ~held, -1.0, 0.0)),
+            ("v", rows, rows, np.where(vel & ~held, -1.0, 0.0)),
+            ("setpoint", rows, rows, np.where((pos | vel) & ~held, 1.0, 0.0)),
+            ("v", n + rows, rows, -itf),
+            ("rate_ref", n + rows, rows, np.where(pos, itf, 0.0)),
+            ("setpoint", n + rows, rows, np.where(vel, itf, 0.0)),
+            ("x", n + rows, n + rows, -itf)))
+
     # -- introspection ------------------------------------------------------------------------
     def gains_of(self, joint: str) -> dict:
         """The resolved gains of one joint (mode, kp, ki, kd, tf, tau_max)."""
@@ -206,7 +263,8 @@ class JointPid(Component[JointPidParams]):
 
 
 class _Cache:
-    __slots__ = ("dint", "zrate", "output", "law")
+    __slots__ = ("dint", "zrate", "output", "law", "jac_tau", "jac_state")
 
     def __init__(self, dint, zrate, output, law):
         self.dint, self.zrate, self.output, self.law = dint, zrate, output, law
+        self.jac_tau = self.jac_state = None       # (mask it was made for, Elementwise): port_jacobian, state_jacobian

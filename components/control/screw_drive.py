@@ -51,6 +51,21 @@ class ScrewDrive(Component[ScrewDriveParams]):
         self._kd = np.where(screw, p.kv, p.kd)
         self._v_ref = np.where(screw, p.omega, 0.0)
         self.screw_dofs = np.flatnonzero(screw)
+        self._jac = None
+
+    def port_jacobian(self, port, t, x, u, y):
+        """∂tau/∂joint_q = −k_p, ∂tau/∂joint_v = −k_d (k_v on screws); zero where saturated."""
+        from snakesim.framework.linearization import Elementwise
+        if port != "tau":
+            return None
+        n = self.robot.nj
+        rows = np.arange(n)
+        if self.p.tau_max is None:
+            if self._jac is None:           # a constant: the same object every time
+                self._jac = Elementwise(n, (("joint_q", rows, rows, -self._kp), ("joint_v", rows, rows, -self._kd)))
+            return self._jac
+        live = (np.abs(y.tau) < self.p.tau_max).astype(float)
+        return Elementwise(n, (("joint_q", rows, rows, -self._kp * live), ("joint_v", rows, rows, -self._kd * live)))
 
     def output(self, t, x, u, y):
         tau = y.tau

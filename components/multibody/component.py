@@ -34,6 +34,28 @@ continuous state: [q, v] on the configuration manifold (pin.integrate), second o
 provides  robot: RobotModel   the built robot (robot_model.py), handed to every component that
                              declares ``Uses(RobotModel)``: a scene names its robot only here
 
+Port layout (element names are the recorded column names, ``robot.q.root_joint.qw``):
+
+    q[nq]   root_joint.x, .y, .z (tail origin, world), root_joint.qx, .qy, .qz, .qw (the tail's
+            orientation quaternion, x, y, z, w: scalar LAST), then per moving joint in Pinocchio
+            order (parents first): a revolute joint one angle (``bend_00``), a continuous joint
+            two numbers, its (cos, sin) (``screw_front_00.cos``, ``.sin``); mimic joints (the rear
+            screw of a counter-rotating pair) have none: they follow their primary
+    v[nv]   root_joint.vx, .vy, .vz (tail origin velocity, TAIL frame), .wx, .wy, .wz, then one
+            rate per DOF joint (continuous joints included)
+    joint_q, joint_v, tau [nj]
+            the DOF joints only: revolute and continuous joints that are not mimics, URDF order;
+            fixed joints and mimic followers (``screw_rear_*``) are omitted; continuous joints
+            as one angle wrapped to (-π, π]
+
+Armature: the URDF carries none, so each DOF gets a reflected rotor inertia (a geared
+joint's motor, J_m·N²): the design's per-kind table (``Design.armature_per_effort``, kg·m²
+per N·m of effort limit: EELS 1.0 bend 0.24, twist 0.12, screw 0.021 kg·m²) unless the
+scene sets ``armature`` (by joint or pattern) or ``armature_per_effort`` (by kind: bend,
+twist, screw, other); ``armature: {"*": 0}`` removes it (what another engine reading
+the same URDF simulates). ``snakesim check`` prints each value and
+its source.
+
 Links (nl) are the URDF's <link> elements in document order, massless
 frames included; DOF joints (nj) the moving joints that are not mimics, in
 URDF order (``robot.links`` and ``robot.joints``; with the usual
@@ -176,6 +198,7 @@ class Multibody(Component[MultibodyParams]):
             inertia=ta.inertia, jq_idx=self._jq_idx, jq_cs=self._jq_cs, dof_v=self._dof_v, damping=self._damp,
             cut_links=self._cut_links, g_param=self._g_param, gravity_scale=p.gravity_input == "scale")
         self._report = None
+        self._selections = None
         self._x0 = joint_values.initial_state(robot, p, model)   # validated here, so errors name the component
 
     def continuous_state(self):
@@ -199,7 +222,8 @@ class Multibody(Component[MultibodyParams]):
         on the manifold only with this correction (Munthe-Kaas); without it
         classical RK4 is second order in the free-flyer's orientation.
         """
-        k[:6] = np.linalg.solve(self._pin.Jexp6(np.ascontiguousarray(u[:6])), k[:6])
+        pin = self._pin
+        k[:6] = pin.Jlog6(pin.exp6(u[:6])) @ k[:6]          # Jexp6(u)⁻¹ = Jlog6(exp6(u))
 
     # -- this run's cache -----------------------------------------------------------------------
     def make_cache(self, x, u, y):
@@ -227,6 +251,22 @@ class Multibody(Component[MultibodyParams]):
             c.qdd[:] = a
             c.accelerations()
 
+    # -- derivatives for linearly implicit integrators (framework/linearization.py) ------------------
+    def port_jacobian(self, port, t, x, u, y):
+        """joint_q and joint_v copy coordinates of the state's tangent ([q tangent, v], DOF columns)."""
+        from snakesim.framework.linearization import Selection
+        if self._selections is None:        # constants of the layout: the same objects every time
+            self._selections = {"joint_q": Selection(self._dof_v), "joint_v": Selection(self._nv + self._dof_v),
+                                "v": Selection(self._nv + np.arange(self._nv))}
+        return self._selections.get(port)
+
+    def mechanical_jacobian(self, t, x, u, y, lin):
+        """M and ∂Q/∂(q, v, other states) from the torque and wrench inputs' sources (linearization.py)."""
+        from .linearization import mechanical_block
+        if self.mode == "mimic_crba":
+            return None                 # its CRBA convention differs (model.py): left explicit
+        return mechanical_block(self, t, x, u, y, lin)
+
     # -- outputs ---------------------------------------------------------------------------
     def calc_state(self, t, x, u, y):
         c = u.cache
@@ -246,8 +286,12 @@ class Multibody(Component[MultibodyParams]):
 
     # -- introspection ------------------------------------------------------------------------
     def build_report(self):
-        """``snakesim check`` shows the multibody optimisation with its timing."""
-        return self.optimisation_report(timing=True)
+        """``snakesim check`` shows the multibody optimisation with its timing, and each joint's armature
+        with where it came from (the URDF has none: the design or the scene adds it)."""
+        rep = self.optimisation_report(timing=True)
+        rep["armature"] = {j: {"kg_m2": v, "source": src}
+                           for j, (v, src) in joint_values.armature_sources(self.robot, self.p).items()}
+        return rep
 
     def optimisation_report(self, timing: bool = True):
         """The multibody optimisation (paper 2.1.4): links, joints and DOF before and after, and the
@@ -279,7 +323,7 @@ class _Cache:
     component because Pinocchio 4.1's Data holds O(nv³) derivative tensors (2 GB at 100 modules)."""
 
     __slots__ = ("x", "q", "v", "a", "qdd", "g", "vv", "fresh", "model", "want_acc", "kin", "ports", "state", "force",
-                 "solve", "accelerations", "momentum", "energy")
+                 "solve", "accelerations", "momentum", "energy", "ensure_kinematics", "lin_scratch", "frames", "lin_tau")
 
     def __init__(self, mb: Multibody, x, u, y):
         from . import kernels as k
@@ -296,8 +340,9 @@ class _Cache:
         self.want_acc = bool(used & {"a", "link_accelerations", "joint_wrenches"})
         z3 = lambda: np.zeros((nl, 3))  # noqa: E731
         self.fresh = np.zeros(1, dtype=bool)                      # the kinematics belong to at_q, at_v
+        self.frames = (np.zeros((nl, 3, 3)), z3(), z3())          # R, p, aw: read by linearization.py
         self.kin = k.Kin(q=q, v=v, at_q=np.zeros(nq), at_v=np.zeros(nv), fresh=self.fresh,
-                         R=np.zeros((nl, 3, 3)), p=z3(), w=z3(), vo=z3(), aw=z3(), thd=np.zeros(nl), alpha=z3(),
+                         R=self.frames[0], p=self.frames[1], w=z3(), vo=z3(), aw=self.frames[2], thd=np.zeros(nl), alpha=z3(),
                          ao=z3(), S=np.zeros((nl, 6)), T=T, qdd=self.qdd, g=self.g, h_scratch=np.zeros(6),
                          c_scratch=np.zeros(3), e_scratch=np.zeros(2))
         self.ports = k.Ports(tau=u.tau, wrenches=u.wrenches, gravity=u.gravity, q=y.q, v=y.v, joint_q=y.joint_q,
@@ -310,6 +355,9 @@ class _Cache:
         self.state, self.force = bind(k.state_step, *args), bind(k.force_step, *args)
         self.accelerations, self.momentum = bind(k.acceleration_step, *args), bind(k.momentum_step, *args)
         self.energy = bind(k.energy_step, *args)
+        self.ensure_kinematics = bind(k._ensure_kinematics, mb._tree, self.kin)
+        self.lin_scratch = np.zeros((nl, 6, 6))          # composite blocks (linearization.tree_quadratic)
+        self.lin_tau = None                                # (torque input's Coo, its Gq, Gv, GF parts)
         if mb.mode != "mimic_crba":
             self.solve = functools.partial(mb._pin.aba, model, mb.dyn.data, q, v, T)
         else:

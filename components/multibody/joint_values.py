@@ -12,36 +12,75 @@ import math
 
 import numpy as np
 
+from snakesim.robots.designs import GEARED_ARMATURE_PER_EFFORT
+
 from .model import match_values
 from .robot_model import joint_kind
 from .urdf import MultibodyModelError
 
-#: Default reflected rotor inertia per joint kind, kg·m² per N·m of the joint's URDF effort limit.
-#: A geared actuator's reflected inertia J_m·N² and peak torque T_m·N scale together:
-#: J/T = (J_m/T_m)·N ≈ 2e-3 s² for harmonic-drive bend/twist actuators (BLDC J_m/T_m ~ 2e-5 s²,
-#: N ~ 100) and hobby servos alike, less for the lower-ratio screw drives. Joints without an
-#: effort limit get armature_floor.
-ARMATURE_PER_EFFORT = {"bend": 2e-3, "twist": 2e-3, "screw": 7e-4, "other": 1e-3}
+#: Default reflected rotor inertia per joint kind, kg·m² per N·m of the joint's URDF effort limit, for a
+#: robot that is not a snakesim.robots design (a bare URDF); a design carries its own
+#: (``Design.armature_per_effort``). Joints without an effort limit get armature_floor.
+ARMATURE_PER_EFFORT = dict(GEARED_ARMATURE_PER_EFFORT)
 
 
 def armature(robot, p) -> dict[str, float]:
+    return {name: value for name, (value, _) in armature_sources(robot, p).items()}
+
+
+def armature_sources(robot, p) -> dict[str, tuple[float, str]]:
+    """Each DOF joint's armature, kg·m², and where it came from: the scene's ``armature`` (by joint), its
+    ``armature_per_effort`` (by kind), the design's per-kind default, the bare-URDF default, or the floor."""
     explicit = match_values(robot.joints, p.armature, "armature")
-    per_kind = {**ARMATURE_PER_EFFORT, **p.armature_per_effort}
-    unknown = set(per_kind) - set(ARMATURE_PER_EFFORT)
+    unknown = set(p.armature_per_effort) - set(ARMATURE_PER_EFFORT)
     if unknown:
         raise MultibodyModelError(f"armature_per_effort: unknown joint kind(s) {sorted(unknown)}; "
                                   "kinds: bend, twist, screw, other")
+    design = _design_table(robot)
     out = {}
     for name in robot.joints:
+        kind = joint_kind(name)
         if name in explicit:
-            out[name] = explicit[name]
+            out[name] = (explicit[name], "assembly: armature")
             continue
-        per = per_kind[joint_kind(name)]
-        out[name] = max(p.armature_floor, per * robot.tree.joint_by_name[name].effort)
-    bad = {k: v for k, v in out.items() if not (v >= 0 and math.isfinite(v))}
+        if kind in p.armature_per_effort:
+            per, origin = p.armature_per_effort[kind], "assembly: armature_per_effort"
+        elif design is not None:
+            per, origin = design[kind], f"design {robot.design}"
+        else:
+            per, origin = ARMATURE_PER_EFFORT[kind], "default for a bare URDF"
+        effort = robot.tree.joint_by_name[name].effort
+        value = per * effort
+        if value < p.armature_floor:
+            value, origin = p.armature_floor, f"armature_floor ({origin} gives {value:.3g})"
+        else:
+            origin = f"{origin}: {per:g} kg·m²/N·m × effort {effort:g} N·m"
+        out[name] = (value, origin)
+    bad = {k: v for k, (v, _) in out.items() if not (v >= 0 and math.isfinite(v))}
     if bad:
         raise MultibodyModelError(f"armature must be finite and >= 0: {bad}")
     return out
+
+
+def _design_table(robot) -> dict[str, float] | None:
+    if robot.design is None:
+        return None
+    from snakesim.robots.designs import get_design
+
+    return {**ARMATURE_PER_EFFORT, **get_design(robot.design).armature_per_effort}
+
+
+def armature_lines(sources: dict[str, tuple[float, str]]) -> list[str]:
+    """The armature table of `snakesim check`: one line per (kind, value, source), joints counted."""
+    groups: dict[tuple, list[str]] = {}
+    for name, (value, origin) in sources.items():
+        groups.setdefault((joint_kind(name), round(value, 12), origin), []).append(name)
+    lines = ["  armature (reflected rotor inertia, not in the URDF; set armature / armature_per_effort on the "
+             "multibody, or 0 for none):"]
+    for (kind, value, origin), names in groups.items():
+        lines.append(f"    {kind:<6} {len(names):>3} joint(s) {value:10.4g} kg·m²   {origin}")
+    return lines
+
 
 def damping(robot, p) -> dict[str, float]:
     out = match_values(robot.joints, p.damping, "damping")

@@ -114,6 +114,9 @@ class OptimisationReport(dict):
                 lines.append(f"    {path:8s} {c['optimised']:9.1f} / {c['unoptimised']:9.1f}   "
                              f"x{c['unoptimised'] / c['optimised']:.2f}   ({c['unoptimised_dof']} DOF unoptimised)")
         lines.append(f"  baseline: {self['baseline']}")
+        if self.get("armature"):
+            from .joint_values import armature_lines
+            lines += armature_lines({j: (a["kg_m2"], a["source"]) for j, a in self["armature"].items()})
         return "\n".join(lines)
 
 

@@ -31,12 +31,13 @@ import fnmatch
 import json
 from functools import lru_cache
 from pathlib import Path
-from typing import Any, Callable
+from typing import Annotated, Any, Callable
 
 import numpy as np
 from pydantic import Field
 
 from snakesim.framework import Params
+from snakesim.framework.paths import assembly_path
 
 from .urdf import MultibodyModelError, parse_urdf, read_urdf_text
 
@@ -46,8 +47,9 @@ JOINT_KINDS = ("bend", "twist", "screw", "other")
 class RobotSource(Params):
     """Which robot: the keys a scene writes once, on the component that provides the robot."""
 
-    urdf: str | None = Field(None, description="URDF text or path; with 'design', a user URDF of that design "
-                                               "(checked against its structure)")
+    urdf: Annotated[str | None, assembly_path(lambda v: not v.lstrip().startswith("<"))] = Field(
+        None, description="URDF text or path (relative to the file naming it); with 'design', a user URDF of "
+                          "that design (checked against its structure)")
     design: str | None = Field(None, description="snakesim.robots design, e.g. eels-1.0")
     modules: int | None = Field(None, ge=1, description="module count for a design")
     head: bool | None = Field(None, description="head on/off for a design (default: the design's)")

@@ -11,10 +11,16 @@ can no longer see.
 Conventions (those of URDF and Pinocchio): a joint's frame is its child
 link's frame; ``<origin>`` places it in the parent link's frame with
 ``rpy`` = R_z(yaw) R_y(pitch) R_x(roll); revolute and continuous joints turn
-about ``<axis>`` (default +x, normalised here) by the joint angle. Supported
+about ``<axis>`` (normalised here; URDF's default +x is refused on a moving joint, which must
+write its axis: a bend joint silently becoming a twist is the trap) by the joint angle. Supported
 joint types: revolute, continuous, fixed (the root gets a free-flyer from the
 component). Prismatic, floating and planar joints raise
 :class:`MultibodyModelError` naming the joint.
+
+Physically impossible descriptions are refused with the file, the link or joint and the value:
+a non-finite number anywhere, a negative mass, inertia on a massless link, a singular inertia on a
+link with mass, principal moments that break the triangle inequality (I1 + I2 >= I3), a moving
+joint without ``<axis>``, ``<limit lower>`` above ``upper``, a negative effort or velocity limit.
 """
 
 from __future__ import annotations
@@ -54,6 +60,9 @@ class Joint:
     axis: np.ndarray               # unit axis, joint frame (unused for fixed)
     mimic: tuple[str, float, float] | None = None   # (joint, multiplier, offset)
     effort: float = 0.0            # <limit effort>, N·m (0 when absent)
+    velocity: float = 0.0          # <limit velocity>, rad/s (0 when absent)
+    lower: float | None = None     # <limit lower/upper>, rad (None when absent)
+    upper: float | None = None
 
     @property
     def moving(self) -> bool:
@@ -160,7 +169,33 @@ def read_urdf_text(urdf: str) -> tuple[str, str]:
     path = Path(urdf).expanduser()
     if not path.is_file():
         raise MultibodyModelError(f"URDF file '{urdf}' does not exist (give a path to a .urdf file or the URDF text)")
-    return path.read_text(encoding="utf-8"), str(path)
+    try:
+        return path.read_text(encoding="utf-8"), str(path)
+    except UnicodeDecodeError as e:
+        raise MultibodyModelError(f"{path}: not UTF-8 text ({e.reason} at byte {e.start}); a URDF is an XML "
+                                  "text file") from None
+
+
+def _check_inertia(where: str, mass: float, vals: dict, i_local: np.ndarray) -> None:
+    """Refuse inertia no rigid body has (tolerance relative to the largest moment)."""
+    scale = float(np.abs(i_local).max())
+    shown = ", ".join(f"{k}={v:g}" for k, v in vals.items())
+    if mass == 0.0:
+        if scale > 0.0:
+            raise MultibodyModelError(f"{where}: mass is 0 but the inertia is not ({shown}); a massless link "
+                                      "has zero inertia: give its mass or remove the <inertia> values")
+        return
+    moments = np.linalg.eigvalsh(i_local)
+    tol = 1e-9 * max(scale, 1e-300)
+    if moments[0] <= tol:
+        raise MultibodyModelError(
+            f"{where}: mass {mass:g} kg with a singular inertia ({shown}; principal moments "
+            f"{', '.join(f'{m:.6g}' for m in moments)}); a link with mass needs a positive-definite inertia "
+            "(every principal moment > 0)")
+    if moments[0] + moments[1] < moments[2] - tol:
+        raise MultibodyModelError(
+            f"{where}: inertia ({shown}) breaks the triangle inequality: principal moments "
+            f"{', '.join(f'{m:.6g}' for m in moments)} need I1 + I2 >= I3 (no mass distribution has these)")
 
 
 def parse_urdf(text: str, source: str = "<urdf text>") -> LinkTree:
@@ -188,7 +223,7 @@ def parse_urdf(text: str, source: str = "<urdf text>") -> LinkTree:
             m = inertial.find("mass")
             mass = float(_floats(m.get("value") if m is not None else None, 1, (0.0,), where, "mass value")[0])
             if mass < 0:
-                raise MultibodyModelError(f"{where}: mass {mass} is negative")
+                raise MultibodyModelError(f"{where}: mass {mass:g} is negative (valid: >= 0 kg)")
             rot, xyz = _origin(inertial, where)
             it = inertial.find("inertia")
             vals = {k: 0.0 for k in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")}
@@ -199,8 +234,7 @@ def parse_urdf(text: str, source: str = "<urdf text>") -> LinkTree:
             i_local = np.array([[vals["ixx"], vals["ixy"], vals["ixz"]],
                                 [vals["ixy"], vals["iyy"], vals["iyz"]],
                                 [vals["ixz"], vals["iyz"], vals["izz"]]])
-            if np.any(np.linalg.eigvalsh(i_local) < -1e-12 * max(1.0, np.abs(i_local).max())):
-                raise MultibodyModelError(f"{where}: inertia tensor is not positive semi-definite ({vals})")
+            _check_inertia(where, mass, vals, i_local)
             link.mass, link.com, link.inertia = mass, xyz, rot @ i_local @ rot.T
         links.append(link)
     if not links:
@@ -230,11 +264,17 @@ def parse_urdf(text: str, source: str = "<urdf text>") -> LinkTree:
             raise MultibodyModelError(f"{where}: link '{child}' already has a parent joint "
                                       f"'{parent_joint[child].name}' (a URDF is a tree)")
         rot, xyz = _origin(el, where)
-        axis = _floats(el.find("axis").get("xyz") if el.find("axis") is not None else None, 3, (1, 0, 0), where, "axis xyz")
+        axis_el = el.find("axis")
+        if jtype != "fixed" and (axis_el is None or axis_el.get("xyz") is None):
+            raise MultibodyModelError(f"{where}: a {jtype} joint without <axis xyz=...>; URDF would default to "
+                                      "(1 0 0), a twist about the link's x axis: write the axis explicitly "
+                                      "(e.g. <axis xyz=\"0 0 1\"/>)")
+        axis = _floats(axis_el.get("xyz") if axis_el is not None else None, 3, (1, 0, 0), where, "axis xyz")
         if jtype != "fixed":
             n = np.linalg.norm(axis)
             if n < 1e-12:
-                raise MultibodyModelError(f"{where}: axis is zero")
+                raise MultibodyModelError(f"{where}: axis xyz='{axis_el.get('xyz')}' is zero; a {jtype} joint "
+                                          "needs a non-zero axis direction")
             axis = axis / n
         mimic = None
         mi = el.find("mimic")
@@ -242,9 +282,8 @@ def parse_urdf(text: str, source: str = "<urdf text>") -> LinkTree:
             mult = float(_floats(mi.get("multiplier"), 1, (1.0,), where, "mimic multiplier")[0])
             off = float(_floats(mi.get("offset"), 1, (0.0,), where, "mimic offset")[0])
             mimic = (mi.get("joint"), mult, off)
-        lim = el.find("limit")
-        effort = float(lim.get("effort", 0.0)) if lim is not None else 0.0
-        j = Joint(name, jtype, parent, child, rot, xyz, axis, mimic, effort)
+        effort, velocity, lower, upper = _limits(el.find("limit"), jtype, where)
+        j = Joint(name, jtype, parent, child, rot, xyz, axis, mimic, effort, velocity, lower, upper)
         joints.append(j)
         parent_joint[child] = j
     by_name = {j.name: j for j in joints}
@@ -270,3 +309,23 @@ def parse_urdf(text: str, source: str = "<urdf text>") -> LinkTree:
     if len(tree.topological()) != len(links):
         raise MultibodyModelError(f"{source}: links are not all connected to the root '{roots[0]}' (a cycle?)")
     return tree
+
+
+def _limits(lim, jtype: str, where: str) -> tuple[float, float, float | None, float | None]:
+    """(effort, velocity, lower, upper) of a joint's <limit>: finite numbers, effort and velocity
+    >= 0, lower <= upper (0, 0, None, None where absent)."""
+    if lim is None:
+        return 0.0, 0.0, None, None
+
+    def value(key, default):
+        text = lim.get(key)
+        return default if text is None else float(_floats(text, 1, (default,), where, f"limit {key}")[0])
+
+    effort, velocity = value("effort", 0.0), value("velocity", 0.0)
+    for key, v in (("effort", effort), ("velocity", velocity)):
+        if v < 0:
+            raise MultibodyModelError(f"{where}: limit {key}={v:g} is negative (valid: >= 0)")
+    lower, upper = value("lower", None), value("upper", None)
+    if jtype == "revolute" and lower is not None and upper is not None and lower > upper:
+        raise MultibodyModelError(f"{where}: limit lower={lower:g} is above upper={upper:g} (need lower <= upper)")
+    return effort, velocity, lower, upper

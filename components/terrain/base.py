@@ -60,7 +60,10 @@ def unit(v: np.ndarray, fallback=(0.0, 0.0, 1.0)) -> np.ndarray:
 def frame_from_axis(axis) -> np.ndarray:
     """Rotation R (3x3) whose third column is ``axis`` (unit): local -> world is R @ x_local."""
     a = np.asarray(axis, dtype=float)
-    a = a / np.linalg.norm(a)
+    n = np.linalg.norm(a) if a.shape == (3,) else 0.0
+    if not (np.isfinite(n) and n > 1e-12):
+        raise ValueError(f"axis = {a.tolist()}: needs a finite, non-zero 3-vector")
+    a = a / n
     ref = np.array([0.0, 0.0, 1.0]) if abs(a[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
     e1 = np.cross(ref, a)
     e1 /= np.linalg.norm(e1)

@@ -39,8 +39,16 @@ class HeightField(Terrain):
         super().__init__(**kw)
         z = np.asarray(z, dtype=np.float64)
         check_grid(z, source)
-        if not resolution > 0:
-            raise ConfigError(f"DEM resolution must be > 0 m, got {resolution}", source, "resolution")
+        big = np.abs(z) > MAX_HEIGHT
+        if big.any():
+            i, j = np.argwhere(big)[0]
+            raise ConfigError(f"DEM height {z[i, j]:g} m at row {i}, column {j} (after z_scale and z_offset) is "
+                              f"beyond ±{MAX_HEIGHT:g} m, where distances lose their precision ({int(big.sum())} "
+                              f"such value(s)); check the grid's units and z_scale", source, "z_scale")
+        if not (resolution > 0 and np.isfinite(resolution)):
+            raise ConfigError(f"DEM resolution must be > 0 m and finite, got {resolution}", source, "resolution")
+        if not np.all(np.isfinite(np.asarray(origin, dtype=float))):
+            raise ConfigError(f"DEM origin must be finite, got {list(origin)}", source, "origin")
         self.z, self.res = np.ascontiguousarray(z), float(resolution)
         self.x0, self.y0 = (float(v) for v in origin)
         gy, gx = np.gradient(self.z, self.res)
@@ -76,6 +84,10 @@ class HeightField(Terrain):
         lo = np.array([self.x0, self.y0, self.z.min()])
         hi = np.array([self.x0 + (nx - 1) * self.res, self.y0 + (ny - 1) * self.res, self.z.max()])
         return Bounds(lo, hi)
+
+
+#: |height| bound of a DEM, m: beyond it float64 distances and slopes lose millimetre precision
+MAX_HEIGHT = 1.0e6
 
 
 def check_grid(z: np.ndarray, source: str) -> None:

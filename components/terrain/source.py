@@ -8,16 +8,25 @@ out     terrain  structured Terrain (no inputs, no state)
 
 from __future__ import annotations
 
+from typing import Annotated
+
 from pydantic import Field
 
 from snakesim.framework import Component, Output, Params
+from snakesim.framework.paths import assembly_path
 
 from .base import Terrain
 from .spec import load_terrain
 
 
+def looks_like_a_path(name: str) -> bool:
+    """A file, not a name in terrains/: it has a folder or a file suffix."""
+    return "/" in name or name.lower().endswith((".yaml", ".yml", ".obj", ".stl", ".ply"))
+
+
 class TerrainSourceParams(Params):
-    name: str = Field("flat-ice", description="terrain name or path")
+    name: Annotated[str, assembly_path(looks_like_a_path)] = Field(
+        "flat-ice", description="terrain name in terrains/, or a path (relative to the file naming it)")
     spec: dict | None = Field(None, description="inline terrain definition")
     store: str | None = Field(None, description="terrain store folder")
 

@@ -31,7 +31,7 @@ from importlib.resources import files
 from pathlib import Path
 from typing import Annotated, Literal, Union, get_args
 
-from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError, model_validator
+from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError, field_validator, model_validator
 
 from snakesim.components.materials import Material, material_from_mapping, read_material_file
 from snakesim.framework import ConfigError
@@ -44,7 +44,7 @@ Vec3 = tuple[float, float, float]
 
 
 class _Model(BaseModel):
-    model_config = ConfigDict(frozen=True, extra="forbid")
+    model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)   # every number finite
 
 
 class _Base(_Model):
@@ -100,6 +100,14 @@ class TubeSpec(_Base):
     origin: Vec3 = (0.0, 0.0, 0.0)
     axis: Vec3 = (1.0, 0.0, 0.0)
     roughness: RoughnessSpec | None = None
+
+    @field_validator("axis")
+    @classmethod
+    def _axis(cls, axis):
+        if not sum(a * a for a in axis) > 1e-24:
+            raise ValueError(f"axis = {list(axis)}: the tube's axis direction must be a non-zero vector "
+                             f"(e.g. [1, 0, 0])")
+        return axis
 
 
 class WallsSpec(_Base):

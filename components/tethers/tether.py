@@ -28,7 +28,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import ConfigDict, Field
 
 from snakesim.components.multibody.robot_model import RobotModel
 from snakesim.framework import Component, Input, Output, Params, Uses
@@ -36,7 +36,7 @@ from snakesim.framework import Component, Input, Output, Params, Uses
 Vec3 = tuple[float, float, float]
 
 
-class TetherSpec(BaseModel):
+class TetherSpec(Params):
     model_config = ConfigDict(frozen=True, extra="forbid")
     link: str = Field(..., description="robot link the rope is tied to")
     offset: Vec3 = Field((0.0, 0.0, 0.0), description="m, tie point in the link frame")

@@ -238,7 +238,7 @@ class RerunSink(Component[RerunSinkParams]):
 
             v.sensors = SensorLog(rec, p.sensors, point_radius=p.point_radius, intensity_range=p.intensity_range,
                                   frustum_depth=p.frustum_depth)
-        v.finalizer = weakref.finalize(v, _finish, v.log, rec, v.used_target.mode)
+        v.finalizer = weakref.finalize(v, _finish, v.log, rec, v.used_target.mode, v.used_target.path)
         v.last_wall = time.perf_counter()
 
     def _flush_frames(self, target) -> int:
@@ -304,11 +304,13 @@ def _camera_pinholes(refs, values) -> list[str]:
             if isinstance(value, CameraFrame)]
 
 
-def _finish(log, rec, mode: str) -> None:
+def _finish(log, rec, mode: str, path: str | None = None) -> None:
     log.flush()
     rec.flush()
     if mode == "save":
         rec.disconnect()                             # writes the .rrd footer
+        # say what was written, and how to look at it: a save is otherwise silent
+        sys.stderr.write(f"snakesim viz: wrote {path} (view it with `rerun {path}`)\n")
     elif mode == "serve" and sys.stdin is not None and sys.stdin.isatty():
         sys.stderr.write("snakesim viz: run finished; still serving the recording, Ctrl-C to stop\n")
         try:

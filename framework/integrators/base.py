@@ -19,7 +19,7 @@ from pydantic import BaseModel, ConfigDict
 
 
 class IntegratorParams(BaseModel):
-    model_config = ConfigDict(frozen=True, extra="forbid")
+    model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
 
 
 class Integrator:

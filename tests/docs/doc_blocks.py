@@ -33,3 +33,13 @@ def blocks(page: str) -> list[Block]:
         out.append(Block(m.group(1), title.group(1) if title else None, m.group(3),
                          text.count("\n", 0, m.start()) + 1))
     return out
+
+
+def assembled_files(page: str) -> dict[str, str]:
+    """The files a page prints: its ``title="FILE"`` blocks, a file printed in parts (several blocks with
+    one title, in page order) joined by two blank lines, as top-level Python code is spaced."""
+    parts: dict[str, list[str]] = {}
+    for b in blocks(page):
+        if b.title:
+            parts.setdefault(b.title, []).append(b.text)
+    return {title: "\n\n".join(texts) for title, texts in parts.items()}

@@ -199,9 +199,10 @@ def test_non_finite_discrete_state_is_a_named_stop(scene, tmp_path):
     s = scene("""
         sim: {duration: 0.1, dt: 0.001}
         components:
-          src: {type: step, params: {initial: 1.0, value: .inf, t_step: 0.02}}
+          src: {type: step, params: {initial: 0.1, value: 1.0e308, t_step: 0.02}}
+          big: {type: gain, params: {k: 10.0}}          # 1e308 * 10 overflows to inf (an inf parameter is refused)
           zoh: {type: zero_order_hold, rate: 100}
-        connections: [src.y -> zoh.u]
+        connections: [src.y -> big.u, big.y -> zoh.u]
         record: [zoh.y]
         """)
     r = s.run(out_dir=tmp_path)

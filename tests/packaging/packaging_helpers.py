@@ -19,6 +19,7 @@ otherwise pip builds in an isolated environment fetched from the index.
 from __future__ import annotations
 
 import importlib.util
+import inspect
 import os
 import shutil
 import subprocess
@@ -30,19 +31,27 @@ import pytest
 
 REPO = Path(__file__).resolve().parents[2]
 #: the top-level folders setup.py maps onto the snakesim namespace
-PROJECT_FOLDERS = ("framework", "components", "assemblies", "robots", "terrains", "configs")
+PROJECT_FOLDERS = ("framework", "components", "campaigns", "assemblies", "robots", "terrains", "configs")
 PROJECT_FILES = ("pyproject.toml", "setup.py", "README.md", "LICENSE")
 
 _PARENT_HOOK = '''"""Added by snakesim's packaging tests: see the parent environment's packages."""
 import os, site, sys
+{hidden_test}
 PARENT = {parent!r}
 EDITABLE = {editable!r}
 if PARENT not in sys.path:
     sys.path.append(PARENT)
     for _name in sorted(os.listdir(PARENT)):
-        if _name.endswith(".pth") and (EDITABLE or not _name.startswith("__editable__")):
+        if _name.endswith(".pth") and (EDITABLE or not is_snakesims_own_editable_hook(_name)):
             site.addpackage(PARENT, _name, set(sys.path))
 '''
+
+
+def is_snakesims_own_editable_hook(name):
+    """The .pth of snakesim's own editable install (``__editable__.snakesim-0.1.0.pth``), and only it: an
+    editable *plugin* (``__editable__.snakesim_demo_plugin-0.1.0.pth``) stays visible, or its entry point
+    would be found with no module behind it and every snakesim command in the venv would fail."""
+    return name.startswith("__editable__.snakesim-")
 
 
 def run(cmd, *, cwd, env=None, timeout=120) -> subprocess.CompletedProcess:
@@ -115,7 +124,8 @@ def make_venv(path: Path, *, editable: bool) -> Path:
                         cwd=path, env=clean_env()).stdout.strip())
     site_dir.mkdir(parents=True, exist_ok=True)
     parent = sysconfig.get_paths()["purelib"]
-    (site_dir / "_snakesim_test_parent.py").write_text(_PARENT_HOOK.format(parent=parent, editable=editable))
+    (site_dir / "_snakesim_test_parent.py").write_text(_PARENT_HOOK.format(
+        parent=parent, editable=editable, hidden_test=inspect.getsource(is_snakesims_own_editable_hook)))
     (site_dir / "_snakesim_test_parent.pth").write_text("import _snakesim_test_parent\n")
     return python
 

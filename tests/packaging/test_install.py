@@ -95,3 +95,27 @@ def test_editable_install_finds_the_working_tree(scratch):
     run([*cmd, "run", "mass-spring-chain", "--duration", "0.05", "--out", scratch / "chain", "--quiet"],
         cwd=scratch, env=clean_env())
     _check_run(scratch / "chain", 51, "cell3/mass.x")
+
+
+def test_an_editable_plugin_stays_visible_in_wheel_venvs():
+    """A wheel venv hides snakesim's own editable install, never an editable plugin's: hiding the plugin's
+    finder while its entry point stays visible made `snakesim` fail in the wheel test."""
+    from packaging_helpers import is_snakesims_own_editable_hook
+
+    assert is_snakesims_own_editable_hook("__editable__.snakesim-0.1.0.pth")
+    assert not is_snakesims_own_editable_hook("__editable__.snakesim_demo_plugin-0.1.0.pth")
+    assert not is_snakesims_own_editable_hook("__editable__.snakesim_ros_extras-2.0.pth")
+
+
+def test_every_packaged_folder_is_declared(scratch):
+    """setuptools warns "Package would be ignored" for each data folder setup.py does not list (pages of
+    it on `pip install -v`); every folder under the packaged roots must be a declared package."""
+    from packaging_helpers import can_build_offline
+
+    if not can_build_offline():
+        pytest.skip("needs setuptools and wheel in this environment (pip install -e .[test])")
+    src = copy_project(scratch / "src")
+    proc = run([sys.executable, "-m", "pip", "wheel", "-v", "--no-deps", "--no-build-isolation", "--no-index",
+                "--disable-pip-version-check", "-w", scratch / "dist", src], cwd=src, env=clean_env(), timeout=300)
+    output = proc.stdout + proc.stderr
+    assert "would be ignored" not in output, [ln for ln in output.splitlines() if "recognizes" in ln]

@@ -28,7 +28,15 @@ def live(tmp_path_factory):
     res = CliRunner().invoke(cli, ["run", str(SCENE), *map(str, SETS), "--viz", "save", str(d / "live.rrd"),
                                    "--out", str(d / "out")], catch_exceptions=False)
     assert res.exit_code == 0, res.output
+    (d / "terminal.txt").write_text(res.output)
     return d
+
+
+def test_save_says_what_it_wrote(live):
+    """`--viz save FILE` names the file it wrote and how to open it (it used to be silent)."""
+    rrd = live / "live.rrd"
+    assert rrd.stat().st_size > 0
+    assert f"wrote {rrd}" in (live / "terminal.txt").read_text()
 
 
 def _links():

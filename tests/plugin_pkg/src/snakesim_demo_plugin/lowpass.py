@@ -12,6 +12,7 @@ The plugin's tests check both the derivative alone (Harness) and the step
 response of the scene ``lowpass-step`` run by the installed ``snakesim``.
 """
 
+
 from __future__ import annotations
 
 from importlib.resources import files
@@ -41,6 +42,7 @@ class LowPass(Component[LowPassParams]):
     Params = LowPassParams
     u = Input(shape="n", unit=None, doc="signal to filter")
     y = Output(shape="n", unit=None, feedthrough=(), doc="filtered signal")
+
 
     def setup(self):
         self._inv_tau = 1.0 / self.p.tau

@@ -1,0 +1,195 @@
+"""numba kernels of the body contact step (body_contact.py): per-piece broad phase, sample
+kinematics, forces reduced to link wrenches. All write into preallocated arrays.
+
+Frames as in sdf_kernels.py: link_poses rows [x, y, z, qx, qy, qz, qw] (world),
+link_velocities rows [v of the link origin, ω] (world axes); sample tables in the link
+frame. The sample placement (sample_points), the plane query and broad phase (plane_query,
+plane_active) and the one contact law (kernels_numba.point_contact_force) are the screw
+back end's, imported; only the force loop is body-specific.
+
+Material table ``mats`` (nm, 5): columns k, c, μ, ev_a, ev_b (materials.py); bodies read
+k, c and μ (ev_a, ev_b describe screw threads). Per piece: ``mu_scale`` (μ_across / μ of
+the material) and ``skin_ratio`` (μ_along / μ_across), which eq. 6 takes as ‖e_v‖ with
+ê_v the skin axis: friction −F_n μ (s + (‖e_v‖ − 1)(s·ê)ê) is μ_along along the axis
+and μ_across across it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from ..kernel_args import record
+from .kernels_numba import add_wrench, point_contact_force
+from .sdf_kernels import np_sum, plane_active, plane_query, sample_points
+
+K, C, MU = 0, 1, 2
+
+
+@njit(cache=True, inline="always")
+def _rot(poses, b, R):
+    x, y, z, w = poses[b, 3], poses[b, 4], poses[b, 5], poses[b, 6]
+    R[0, 0] = 1 - 2 * (y * y + z * z)
+    R[0, 1] = 2 * (x * y - z * w)
+    R[0, 2] = 2 * (x * z + y * w)
+    R[1, 0] = 2 * (x * y + z * w)
+    R[1, 1] = 1 - 2 * (x * x + z * z)
+    R[1, 2] = 2 * (y * z - x * w)
+    R[2, 0] = 2 * (x * z - y * w)
+    R[2, 1] = 2 * (y * z + x * w)
+    R[2, 2] = 1 - 2 * (x * x + y * y)
+
+
+@njit(cache=True)
+def piece_centres(poses, piece_link, centre_B, R, out_centres):
+    """World centre of every piece's bounding sphere: o_l + R_l c_B."""
+    for k in range(piece_link.shape[0]):
+        b = piece_link[k]
+        _rot(poses, b, R)
+        for i in range(3):
+            out_centres[k, i] = poses[b, i] + R[i, 0] * centre_B[k, 0] + R[i, 1] * centre_B[k, 1] \
+                + R[i, 2] * centre_B[k, 2]
+
+
+@njit(cache=True)
+def body_contact_wrenches(m, distance, normal, material, sample, owner, poses, vels, piece_link, axis_B, mu_scale,
+                          skin_ratio, mats, v_eps, mode, ev_floor, R, out_point, out_vel, out_force, out_fn,
+                          out_wrench, out_link_fn):
+    """Forces on the first m samples (world points in out_point already) and their wrenches about each
+    link's origin. A sample with φ < 0 is a contact of depth d = −φ, terrain normal n̂; its velocity
+    v = v_l + ω_l × (p − o_l); F_n = max(0, k d − c v·n̂) (eq. 2); friction by eq. 6 with ê_v the skin
+    axis (R_l axis_B), μ = μ_material · mu_scale, ‖e_v‖ = skin_ratio. Wrench [f, (p − o_l) × f] into
+    out_wrench[l] (zeroed first). Returns the number of samples in contact."""
+    out_wrench[:, :] = 0.0
+    out_link_fn[:] = 0.0
+    n_contact = 0
+    for i in range(m):
+        d = -distance[i]
+        if not d > 0.0:
+            out_fn[i] = 0.0
+            for j in range(3):
+                out_force[i, j] = 0.0
+                out_vel[i, j] = 0.0
+            continue
+        n_contact += 1
+        k = owner[i]
+        q = sample[i]
+        b = piece_link[k]
+        _rot(poses, b, R)
+        rx, ry, rz = out_point[i, 0] - poses[b, 0], out_point[i, 1] - poses[b, 1], out_point[i, 2] - poses[b, 2]
+        wx, wy, wz = vels[b, 3], vels[b, 4], vels[b, 5]
+        vx = vels[b, 0] + (wy * rz - wz * ry)
+        vy = vels[b, 1] + (wz * rx - wx * rz)
+        vz = vels[b, 2] + (wx * ry - wy * rx)
+        out_vel[i, 0], out_vel[i, 1], out_vel[i, 2] = vx, vy, vz
+        ax = R[0, 0] * axis_B[q, 0] + R[0, 1] * axis_B[q, 1] + R[0, 2] * axis_B[q, 2]
+        ay = R[1, 0] * axis_B[q, 0] + R[1, 1] * axis_B[q, 1] + R[1, 2] * axis_B[q, 2]
+        az = R[2, 0] * axis_B[q, 0] + R[2, 1] * axis_B[q, 1] + R[2, 2] * axis_B[q, 2]
+        mat = material[i]
+        fn, fx, fy, fz = point_contact_force(
+            d, normal[i, 0], normal[i, 1], normal[i, 2], vx, vy, vz, ax, ay, az, mats[mat, K], mats[mat, C],
+            mats[mat, MU] * mu_scale[k], skin_ratio[k], 0.0, v_eps, mode, ev_floor)
+        out_fn[i] = fn
+        out_force[i, 0], out_force[i, 1], out_force[i, 2] = fx, fy, fz
+        out_link_fn[b] += fn
+        add_wrench(out_wrench, b, rx, ry, rz, fx, fy, fz)
+    return n_contact
+
+
+# -- the component's kernels, on argument records (kernel_args.py) ----------------------------------
+#   table    BodyTable   the sample tables and friction parameters (built once per component)
+#   work     BodyWork    this run's per-sample scratch and counters, and what the last evaluation saw
+#   ports    BodyPorts   this run's input views and output buffers (or scratch outputs)
+#   surface  sdf_kernels.Surface   per terrain object: material table; a plane's origin, normal, material
+# work.counts: [evaluations, pieces tested, samples queried, active pieces, samples m of the last evaluation]
+
+BodyTable = record("BodyTable", ("broad_phase", "piece_link", "centre_B", "piece_r", "start", "points_B", "axis_B",
+                                 "mu_scale", "skin_ratio", "v_eps", "mode", "ev_floor"))
+BodyWork = record("BodyWork", ("active", "centres", "points", "distance", "normal", "material", "sample", "owner", "R",
+                               "vel", "force", "fn", "counts", "track", "seen_poses", "seen_vels"))
+BodyPorts = record("BodyPorts", ("poses", "vels", "wrenches", "link_fn", "normal_force", "contacts"))
+
+
+@njit(cache=True)
+def _finish(work, ports, n_active, m, n_contact):
+    c = work.counts
+    c[0] += 1
+    c[1] += n_active
+    c[2] += m
+    c[3] = n_active
+    c[4] = m
+    ports.contacts[0] = n_contact
+    ports.normal_force[0] = np_sum(ports.link_fn)
+    if work.track:
+        work.seen_poses[:] = ports.poses
+        work.seen_vels[:] = ports.vels
+
+
+@njit(cache=True)
+def _wrenches(t, w, io, mats, m):
+    return body_contact_wrenches(m, w.distance, w.normal, w.material, w.sample, w.owner, io.poses, io.vels,
+                                 t.piece_link, t.axis_B, t.mu_scale, t.skin_ratio, mats, t.v_eps, t.mode,
+                                 t.ev_floor, w.R, w.points, w.vel, w.force, w.fn, io.wrenches, io.link_fn)
+
+
+@njit(cache=True)
+def body_plane_step(table, work, ports, surface):
+    """One whole evaluation against a plane: broad phase, sample points, plane query, forces, outputs."""
+    t, w, io, f = table, work, ports, surface
+    npc = t.piece_link.shape[0]
+    if t.broad_phase:
+        piece_centres(io.poses, t.piece_link, t.centre_B, w.R, w.centres)
+        n_active = plane_active(w.centres, t.piece_r, f.origin, f.n, w.active)
+    else:
+        for k in range(npc):
+            w.active[k] = k
+        n_active = npc
+    m = 0
+    if n_active:
+        m = sample_points(io.poses, w.active, n_active, t.start, t.points_B, t.piece_link, w.R, w.points,
+                          w.sample, w.owner)
+        plane_query(m, w.points, f.origin, f.n, w.distance, w.normal, w.material)
+        for i in range(m):
+            w.material[i] = f.region_material
+    _finish(w, io, n_active, m, _wrenches(t, w, io, f.mats, m))
+
+
+@njit(cache=True)
+def body_centres_step(table, work, ports):
+    """Broad phase, generic terrain: every piece's sphere centre into work.centres."""
+    piece_centres(ports.poses, table.piece_link, table.centre_B, work.R, work.centres)
+
+
+@njit(cache=True)
+def body_sample_step(table, work, ports):
+    """World points of the active pieces' samples into work.points; sets and returns m."""
+    n_active = work.counts[3]
+    m = 0
+    if n_active:
+        m = sample_points(ports.poses, work.active, n_active, table.start, table.points_B, table.piece_link, work.R,
+                          work.points, work.sample, work.owner)
+    work.counts[4] = m
+    return m
+
+
+@njit(cache=True)
+def body_wrench_step(table, work, ports, surface):
+    """Forces and wrenches of the m samples queried (distance, normal, material filled in), outputs."""
+    m = work.counts[4]
+    _finish(work, ports, work.counts[3], m, _wrenches(table, work, ports, surface.mats, m))
+
+
+@njit(cache=True)
+def body_seen_step(work, ports):
+    """True if the last evaluation saw exactly these inputs (bit for bit)."""
+    return _same(work.seen_poses, ports.poses) and _same(work.seen_vels, ports.vels)
+
+
+@njit(cache=True)
+def _same(a, b):
+    x, y = a.ravel().view(np.uint64), b.ravel().view(np.uint64)
+    for i in range(x.size):
+        if x[i] != y[i]:
+            return False
+    return True
+

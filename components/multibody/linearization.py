@@ -1,0 +1,217 @@
+"""The multibody's Jacobian block for linearly implicit integrators (framework/linearization.py).
+
+    M(q) v̇ = Q(q, v, τ, W) − C(q, v),      Q = τ − damping·v + Σ_l J_lᵀ W_l
+
+The block is M (Pinocchio's CRBA, armature included), ∂Q/∂q and ∂Q/∂v from
+
+- the joint torque input τ, through whatever its source declares (a PID's gains: an
+  ``Elementwise`` on joint_q / joint_v, which this multibody declares as ``Selection``s of its
+  state), so the PID's integral and filter states enter as ∂Q/∂(other states);
+- joint damping (−damping on the DOF diagonal);
+- the link wrench input W, when its source declares a :class:`LinkWrenchJacobian` (or sums such
+  sources, declaring an ``Elementwise`` of unit coefficients): per link l the
+  6×6 derivatives of W_l (world axes, about the link origin) with respect to the link's twist
+  V_l = [v of its origin, ω] and to its small displacement [δp of its origin, δθ]. They enter
+  as Σ_l J_lᵀ A_l J_l, with J_l the link's (6 × nv) Jacobian, which :func:`tree_quadratic`
+  forms on the link tree without forming J_l: the composite-rigid-body recursion with the
+  inertias replaced by the (not necessarily symmetric) A_l, O(nl · depth).
+
+Left out (a W-method tolerates it; all are smooth and slow): the Coriolis and gravity terms'
+derivatives, and the change of the lever arms and contact normals with the link's rotation.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from .kernels import REVOLUTE, ROOT
+
+
+@dataclass(frozen=True)
+class LinkWrenchJacobian:
+    """Derivatives of a (nl, 6) link-wrench output ([f, τ about each link origin], world axes).
+
+    rows      links that carry a non-zero block
+    d_twist   (nl, 6, 6) ∂W_l/∂V_l, V_l = [v of the link origin, ω] (world axes), N·s/m ...
+    d_pose    (nl, 6, 6) ∂W_l/∂δ_l, δ_l = [δp of the link origin, δθ] (world axes), N/m ...
+    inputs    the input ports carrying the links' poses and twists (checked by the reader: they must
+              come from the multibody the wrenches go to)
+    """
+
+    rows: np.ndarray
+    d_twist: np.ndarray
+    d_pose: np.ndarray
+    inputs: tuple[str, ...]
+
+
+@njit(cache=True)
+def _shift_block(rx, ry, rz, A, out):
+    """out += Tᵀ A T, T = [[I, L], [0, I]], L = −[r]×: a 6×6 block about a link origin moved to a point
+    at −r from it (twists and wrenches in world axes). No allocation."""
+    L = np.empty((3, 3))
+    L[0, 0], L[0, 1], L[0, 2] = 0.0, rz, -ry
+    L[1, 0], L[1, 1], L[1, 2] = -rz, 0.0, rx
+    L[2, 0], L[2, 1], L[2, 2] = ry, -rx, 0.0
+    # X = A T: left columns A[:, :3], right columns A[:, :3] L + A[:, 3:]
+    X = np.empty((6, 6))
+    for i in range(6):
+        for j in range(3):
+            X[i, j] = A[i, j]
+            X[i, 3 + j] = A[i, 0] * L[0, j] + A[i, 1] * L[1, j] + A[i, 2] * L[2, j] + A[i, 3 + j]
+    # Tᵀ X: top rows X[:3], bottom rows Lᵀ X[:3] + X[3:]
+    for j in range(6):
+        for i in range(3):
+            out[i, j] += X[i, j]
+            out[3 + i, j] += L[0, i] * X[0, j] + L[1, i] * X[1, j] + L[2, i] * X[2, j] + X[3 + i, j]
+
+
+@njit(cache=True)
+def tree_quadratic(order, parent, jtype, vidx, mult, R, p, aw, rows, A, C, H):
+    """H += Σ_l J_lᵀ A_l J_l for the links in ``rows`` (A_l about link l's origin, world axes).
+
+    J_l maps v to link l's twist. Every block is moved to the root origin O (T_l = [[I, −[o_l −
+    O]×], [0, I]]: A ← T_lᵀ A T_l), summed over subtrees into C (nl, 6, 6 scratch), and
+    H[k, i] += m_k m_i s_kᵀ C_i s_i for every revolute ancestor-or-self k of a revolute link i,
+    s_i = [a_i × (O − p_i), a_i] the joint's unit twist at O; the free-flyer's columns are
+    blockdiag(R_root, R_root) (Pinocchio's local velocity).
+    """
+    root = order[0]
+    C[:, :, :] = 0.0
+    for k in range(rows.size):
+        l = rows[k]
+        _shift_block(p[l, 0] - p[root, 0], p[l, 1] - p[root, 1], p[l, 2] - p[root, 2], A[l], C[l])
+    nz = np.zeros(C.shape[0], dtype=np.bool_)
+    for k in range(rows.size):
+        nz[rows[k]] = True
+    for k in range(order.size - 1, 0, -1):
+        l = order[k]
+        if nz[l]:
+            P = parent[l]
+            C[P] += C[l]
+            nz[P] = True
+    s = np.empty((C.shape[0], 6))
+    for l in range(C.shape[0]):
+        if jtype[l] == REVOLUTE:
+            cx = aw[l, 1] * (p[root, 2] - p[l, 2]) - aw[l, 2] * (p[root, 1] - p[l, 1])
+            cy = aw[l, 2] * (p[root, 0] - p[l, 0]) - aw[l, 0] * (p[root, 2] - p[l, 2])
+            cz = aw[l, 0] * (p[root, 1] - p[l, 1]) - aw[l, 1] * (p[root, 0] - p[l, 0])
+            s[l, 0], s[l, 1], s[l, 2] = cx, cy, cz
+            s[l, 3], s[l, 4], s[l, 5] = aw[l, 0], aw[l, 1], aw[l, 2]
+    Sb = np.zeros((6, 6))
+    for i in range(3):
+        for j in range(3):
+            Sb[i, j] = R[root, i, j]
+            Sb[3 + i, 3 + j] = R[root, i, j]
+    H[0:6, 0:6] += Sb.T @ C[root] @ Sb
+    F = np.empty(6)
+    G = np.empty(6)
+    for l in range(C.shape[0]):
+        if jtype[l] != REVOLUTE or not nz[l]:
+            continue
+        Cl = C[l]
+        for i in range(6):
+            F[i] = 0.0
+            G[i] = 0.0
+            for j in range(6):
+                F[i] += Cl[i, j] * s[l, j]
+                G[i] += Cl[j, i] * s[l, j]
+        vi, mi = vidx[l], mult[l]
+        # the free-flyer's rows and columns
+        for c in range(6):
+            a, b = 0.0, 0.0
+            for i in range(6):
+                a += Sb[i, c] * F[i]
+                b += Sb[i, c] * G[i]
+            H[c, vi] += mi * a
+            H[vi, c] += mi * b
+        # itself and its revolute ancestors
+        H[vi, vi] += mi * mi * (s[l, 0] * F[0] + s[l, 1] * F[1] + s[l, 2] * F[2] + s[l, 3] * F[3] + s[l, 4] * F[4]
+                                + s[l, 5] * F[5])
+        k = parent[l]
+        while k >= 0 and jtype[k] != ROOT:
+            if jtype[k] == REVOLUTE:
+                vk, mk = vidx[k], mult[k]
+                a, b = 0.0, 0.0
+                for i in range(6):
+                    a += s[k, i] * F[i]
+                    b += s[k, i] * G[i]
+                H[vk, vi] += mk * mi * a
+                H[vi, vk] += mi * mk * b
+            k = parent[k]
+
+
+@njit(cache=True)
+def symmetric_from_upper(src, out):
+    """out = src with its strict lower triangle mirrored from the upper one (Pinocchio's CRBA fills
+    the upper)."""
+    n = src.shape[0]
+    for i in range(n):
+        for j in range(i, n):
+            out[i, j] = src[i, j]
+            out[j, i] = src[i, j]
+
+
+def mechanical_block(mb, t, x, u, y, lin):
+    """The multibody's :class:`~snakesim.framework.linearization.Mechanical` block at (q, v)."""
+    from snakesim.framework.linearization import Coo, Mechanical
+
+    c = u.cache
+    nv = mb._nv
+    M = np.empty((nv, nv))
+    symmetric_from_upper(mb._pin.crba(mb.dyn.model, mb.dyn.data, c.q), M)
+    tau = lin.input_jacobian(mb, "tau")
+    if c.lin_tau is None or c.lin_tau[0] is not tau:
+        Gq0 = np.zeros((nv, nv))
+        Gv0 = np.zeros((nv, nv))
+        dof = mb._dof_v
+        Gv0[dof, dof] -= mb._damp
+        GF = None
+        if tau is not None and tau.rows.size:
+            q0 = lin.slices[mb.name].dx.start
+            r, cols, vals = dof[tau.rows], tau.cols, tau.vals
+            inq = (cols >= q0) & (cols < q0 + nv)
+            inv = (cols >= q0 + nv) & (cols < q0 + 2 * nv)
+            np.add.at(Gq0, (r[inq], cols[inq] - q0), vals[inq])
+            np.add.at(Gv0, (r[inv], cols[inv] - q0 - nv), vals[inv])
+            other = ~(inq | inv | lin._owned[cols])              # another multibody's state: left out
+            if other.any():
+                GF = Coo(nv, r[other], cols[other], vals[other])
+        c.lin_tau = (tau, Gq0, Gv0, GF)
+    _, Gq0, Gv0, GF = c.lin_tau
+    Gq, Gv = Gq0.copy(), Gv0.copy()
+    for wj in _link_wrench_terms(lin, mb, mb, "wrenches"):
+        c.ensure_kinematics()
+        R, p, aw = c.frames
+        ta = mb._ta
+        C = c.lin_scratch
+        tree_quadratic(ta.order, ta.parent, ta.jtype, ta.vidx, ta.mult, R, p, aw, wj.rows, wj.d_twist, C, Gv)
+        tree_quadratic(ta.order, ta.parent, ta.jtype, ta.vidx, ta.mult, R, p, aw, wj.rows, wj.d_pose, C, Gq)
+    return Mechanical(M=M, Gq=Gq, Gv=Gv, GF=GF)
+
+
+def _link_wrench_terms(lin, mb, comp, port, depth=0):
+    """The LinkWrenchJacobians that reach ``comp.port``: declared by its source, or by the sources of
+    a sum (an ``Elementwise`` whose terms are inputs added element for element with coefficient 1:
+    a wrench summing junction). Each must be driven by ``mb``'s own link poses and twists."""
+    from snakesim.framework.linearization import Elementwise
+    wj, up = lin.source_jacobian(comp, port)
+    if isinstance(wj, LinkWrenchJacobian):
+        return [wj] if wj.rows.size and _driven_by(lin, up, wj.inputs, mb) else []
+    out = []
+    if isinstance(wj, Elementwise) and depth < 8:
+        for source, rows, index, coef in wj.terms:
+            if source != "x" and np.array_equal(rows, index) and rows.size == wj.size and np.all(coef == 1.0):
+                out += _link_wrench_terms(lin, mb, up, source, depth + 1)
+    return out
+
+
+def _driven_by(lin, comp, inputs, mb) -> bool:
+    """True if every one of ``comp``'s ``inputs`` comes straight from ``mb``."""
+    for port in inputs:
+        src = lin.source(comp, port)
+        if src is None or src[0] is not mb:
+            return False
+    return True

@@ -1,0 +1,309 @@
+"""The system's Jacobian J = ∂f/∂X, assembled from what components declare, and the linear solve
+(I − c·J) k = r that linearly implicit integrators (:mod:`.integrators.rosenbrock_w`) need.
+
+Components declare derivatives; none is required. Three optional methods:
+
+``port_jacobian(port, t, x, u, y)``
+    the derivative of one output port with respect to the component's own state and inputs,
+    evaluated at the point of its last ``output()`` (the integrator asks right after the plan's
+    evaluation at the step's start). It returns one of
+
+    - :class:`Selection`: the port copies coordinates of the component's tangent state
+      (a multibody's joint angles and rates);
+    - :class:`Elementwise`: each element depends on a few elements of inputs or of the state,
+      with given coefficients (a PID, a joint spring-damper);
+    - an object a particular reader understands (the contact's per-link wrench derivative,
+      read by the multibody: :mod:`snakesim.components.multibody.linearization`);
+    - ``None``: not declared. The reader then leaves the dependence out of J.
+
+``state_jacobian(t, x, u, y)``
+    a component with first-order continuous state: an :class:`Elementwise` whose rows are its
+    tangent state's derivative, terms on its inputs and on its own state (``"x"``). Only the
+    diagonal of its own block is kept (filters and integrals have nothing else).
+
+``mechanical_jacobian(t, x, u, y, lin)``
+    a component with a second-order state ``[q, v]`` (``q̇ = v`` in the tangent space, ``M v̇ =
+    Q(q, v, ...)``): its :class:`Mechanical` block, the mass matrix M and the generalised-force
+    derivatives ∂Q/∂q, ∂Q/∂v, and ∂Q/∂(other states) as a sparse matrix. It asks ``lin`` for
+    the derivatives of its inputs (:meth:`Linearization.input_jacobian`,
+    :meth:`Linearization.source_jacobian`). Undeclared (None), only ``q̇ = v`` enters J.
+
+What is left out of J is treated explicitly by a W-method (its order does not depend on J, only
+its stability does): a component that declares nothing costs stability, never accuracy. Couplings
+between two second-order components and off-diagonal first-order terms are left out likewise.
+
+The solve exploits the structure instead of factorising the (ndx × ndx) matrix. With the
+first-order states F, a second-order owner's q, v and c = γh, (I − cJ) k = r reads::
+
+    k_q − c k_v = r_q
+    M k_v − c (G_q k_q + G_v k_v + G_F k_F) = M r_v
+    k_F − c (d_F ∘ k_F + P_q k_q + P_v k_v) = r_F            (d_F the diagonal)
+
+and eliminating k_q and k_F leaves one (nv × nv) system per owner::
+
+    [M − c G_v − c² G_q − c² G_F D (P_v + c P_q)] k_v = M r_v + c G_q r_q + c G_F D (r_F + c P_q r_q)
+
+with D = diag(1 / (1 − c d_F)). Its LU costs O(nv³) per Jacobian (nv = 36 for ten EELS 1.0
+modules, 306 for a hundred); each solve after it O(nv²).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import linear_solve_kernels as kern
+
+
+@dataclass(frozen=True)
+class Selection:
+    """An output whose flat element i is the coordinate ``cols[i]`` of its component's tangent
+    state (local index): ∂y_i/∂x = e_{cols[i]}."""
+
+    cols: np.ndarray
+
+
+@dataclass(frozen=True)
+class Elementwise:
+    """∂y/∂(inputs, state) as a few entries per output element.
+
+    ``terms``: tuples ``(source, rows, index, coef)``: ∂y[rows[k]]/∂source[index[k]] = coef[k],
+    flat indices; ``source`` an input port name or ``"x"`` (the component's own tangent state).
+    Inputs not named do not affect y. ``size``: the number of output elements (rows)."""
+
+    size: int
+    terms: tuple[tuple[str, np.ndarray, np.ndarray, np.ndarray], ...]
+
+
+@dataclass(frozen=True)
+class Coo:
+    """A sparse (n_rows × ndx) derivative as triplets; ``selection``: one entry of 1 per row, row i
+    at column cols[i] (rows = arange)."""
+
+    n_rows: int
+    rows: np.ndarray
+    cols: np.ndarray
+    vals: np.ndarray
+    selection: bool = False
+
+    def matvec(self, x: np.ndarray, n: int) -> np.ndarray:
+        """(this @ x) as a length-n vector (rows beyond n_rows are zero)."""
+        return np.bincount(self.rows, weights=self.vals * x[self.cols], minlength=n)
+
+
+def compose(rows, index, coef, sub: Coo) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Triplets of T·sub, T the sparse matrix with entries T[rows[k], index[k]] = coef[k]."""
+    if sub.selection:
+        return rows, sub.cols[index], coef
+    order = np.argsort(sub.rows, kind="stable")
+    srow, scol, sval = sub.rows[order], sub.cols[order], sub.vals[order]
+    ptr = np.searchsorted(srow, np.arange(sub.n_rows + 1))
+    cnt = ptr[index + 1] - ptr[index]
+    k = np.repeat(np.arange(index.size), cnt)
+    m = np.repeat(ptr[index] - np.cumsum(cnt) + cnt, cnt) + np.arange(int(cnt.sum()))
+    return rows[k], scol[m], coef[k] * sval[m]
+
+
+@dataclass
+class Mechanical:
+    """A second-order owner's block: M, ∂Q/∂q, ∂Q/∂v (nv × nv) and ∂Q/∂(other states) (``GF``,
+    rows the owner's v, absolute tangent columns)."""
+
+    M: np.ndarray
+    Gq: np.ndarray
+    Gv: np.ndarray
+    GF: Coo | None = None
+
+
+_EMPTY = Coo(0, np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0))
+
+
+class Linearization:
+    """J of a plan, assembled from the components' declarations at the current evaluation."""
+
+    def __init__(self, plan):
+        self.plan = plan
+        self.ndx = plan.ndx
+        self.io = plan.io                           # name -> (x, u, y)
+        self.slices = {s.comp.name: s for s in plan.slices}
+        self.owners = [s for s in plan.slices if s.second_order]
+        self.first = [s for s in plan.slices if not s.second_order
+                      and type(s.comp).state_jacobian is not _base("state_jacobian")]
+        self._owned = np.zeros(self.ndx, dtype=bool)
+        for s in plan.slices:
+            if s.second_order:
+                self._owned[s.dx] = True
+        self.F = np.flatnonzero(~self._owned)      # first-order tangent indices
+        self._sources = {(d.comp, d.port): (plan.components[u.comp], u.port) for d, u in plan.sources.items()}
+        self.t = 0.0
+        self._memo: dict = {}          # this assembly's answers
+        self._kept: dict = {}          # the last composition per input: reused while its declaration is the same object
+        self.stats = {"assemblies": 0}
+        self.gamma_hint = None         # the integrator's γ, for messages (c = γh)
+
+    # -- what components ask ---------------------------------------------------------------------
+    def source(self, comp, port: str):
+        """(component, output port) driving ``comp``'s input ``port``, or None if unconnected."""
+        return self._sources.get((comp.name, port))
+
+    def source_jacobian(self, comp, port: str):
+        """What the component driving ``comp.port`` declares for that output (``port_jacobian``),
+        with that component; (None, None) when unconnected or undeclared."""
+        key = ("src", comp.name, port)
+        if key not in self._memo:
+            src = self.source(comp, port)
+            if src is None:
+                self._memo[key] = (None, None)
+            else:
+                up, out = src
+                x, u, y = self.io[up.name]
+                self._memo[key] = (up.port_jacobian(out, self.t, x, u, y), up)
+        return self._memo[key]
+
+    def input_jacobian(self, comp, port: str) -> Coo | None:
+        """∂(comp's input ``port``, flat)/∂X (tangent) composed through Selection and Elementwise
+        declarations upstream; None if some link is undeclared."""
+        key = ("in", comp.name, port)
+        if key in self._memo:
+            return self._memo[key]
+        obj, up = self.source_jacobian(comp, port)
+        kept = self._kept.get(key)
+        if kept is not None and kept[0] is obj and all(self.input_jacobian(up, p) is c for p, c in kept[2]):
+            self._memo[key] = kept[1]                   # the same declaration over the same inputs
+            return kept[1]
+        out = None
+        if isinstance(obj, Selection):
+            n = obj.cols.size
+            out = Coo(n, np.arange(n), self.slices[up.name].dx.start + obj.cols, np.ones(n), selection=True)
+        elif isinstance(obj, Elementwise):
+            out = self._compose(up, obj)
+        self._memo[key] = out
+        if obj is not None:
+            deps = () if not isinstance(obj, Elementwise) else tuple(
+                (src, self.input_jacobian(up, src)) for src in {t[0] for t in obj.terms if t[0] != "x"})
+            self._kept[key] = (obj, out, deps)
+        return out
+
+    def _compose(self, comp, ew: Elementwise, skip_state: bool = False) -> Coo:
+        R, C, V = [], [], []
+        for source, rows, index, coef in ew.terms:
+            if rows.size == 0:
+                continue
+            if source == "x":
+                if not skip_state:
+                    R.append(rows), C.append(self.slices[comp.name].dx.start + index), V.append(coef)
+                continue
+            sub = self.input_jacobian(comp, source)
+            if sub is None:
+                continue
+            r, c, v = compose(rows, index, coef, sub)
+            R.append(r), C.append(c), V.append(v)
+        if not R:
+            return Coo(ew.size, np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0))
+        return Coo(ew.size, np.concatenate(R), np.concatenate(C), np.concatenate(V))
+
+    # -- assembly and solve ----------------------------------------------------------------------
+    def assemble(self, t: float) -> None:
+        """Ask every component for its derivatives at the plan's current evaluation (point t, X)."""
+        self.t = t
+        self._memo = {}
+        self.stats["assemblies"] += 1
+        n = self.ndx
+        d = np.zeros(n)
+        R, C, V = [np.zeros(0, np.int64)], [np.zeros(0, np.int64)], [np.zeros(0)]
+        for s in self.first:
+            comp = s.comp
+            x, u, y = self.io[comp.name]
+            ew = comp.state_jacobian(self.t, x, u, y)
+            if ew is None:
+                continue
+            key = ("state", comp.name)
+            srcs = {t[0] for t in ew.terms if t[0] != "x"}
+            ins = tuple((src, self.input_jacobian(comp, src)) for src in srcs)
+            kept = self._kept.get(key)
+            if kept is not None and kept[0] is ew and all(self.input_jacobian(comp, p) is c for p, c in kept[2]):
+                di, dv, r, c, v = kept[1]
+            else:
+                di, dv = [], []
+                for source, rows, index, coef in ew.terms:
+                    if source == "x":
+                        diag = rows == index
+                        di.append(s.dx.start + rows[diag]), dv.append(coef[diag])
+                di = np.concatenate(di) if di else np.zeros(0, np.int64)
+                dv = np.concatenate(dv) if dv else np.zeros(0)
+                m = self._compose(comp, ew, skip_state=True)
+                keep = self._owned[m.cols]                 # first-order on first-order: left out
+                r, c, v = m.rows[keep] + s.dx.start, m.cols[keep], m.vals[keep]
+                self._kept[key] = (ew, (di, dv, r, c, v), ins)
+            np.add.at(d, di, dv)
+            R.append(r), C.append(c), V.append(v)
+        self.d = d
+        rows, cols, vals = np.concatenate(R), np.concatenate(C), np.concatenate(V)
+        order = np.argsort(rows, kind="stable")            # by row, for the factor's join
+        self.P = Coo(n, rows[order], cols[order], vals[order])
+        self._p_ptr = np.searchsorted(self.P.rows, np.arange(n + 1))
+        self.mech = []
+        for s in self.owners:
+            x, u, y = self.io[s.comp.name]
+            mech = s.comp.mechanical_jacobian(self.t, x, u, y, self)
+            if mech is None:                # undeclared: only q̇ = v is known (M = I, no force slopes)
+                nv = s.second_order
+                mech = Mechanical(M=np.eye(nv), Gq=np.zeros((nv, nv)), Gv=np.zeros((nv, nv)))
+            self.mech.append((s, mech))
+
+    def factor(self, c: float) -> None:
+        """Factorise the reduced systems of I − c·J (c = γh)."""
+        self.c = c
+        self.Dinv = 1.0 / (1.0 - c * self.d)
+        self.blocks = []
+        P = self.P
+        for s, mech in self.mech:
+            nv = s.second_order
+            q0 = s.dx.start
+            GF = mech.GF if mech.GF is not None else _EMPTY
+            lu, piv = np.empty((nv, nv)), np.empty(nv, np.int64)
+            kern.reduced_matrix(lu, mech.M, mech.Gq, mech.Gv, c, q0, nv, self.Dinv, GF.rows, GF.cols, GF.vals,
+                                self._p_ptr, P.cols, P.vals)
+            if not kern.lu_factor(lu, piv):
+                raise FloatingPointError(f"{s.comp.name}: the implicit step's matrix M − γh∂Q/∂v − (γh)²∂Q/∂q is "
+                                         f"singular at h = {c / self.gamma_hint:g} s" if self.gamma_hint else
+                                         f"{s.comp.name}: the implicit step's matrix is singular")
+            self.blocks.append((q0, nv, mech.M, mech.Gq, GF, lu, piv, np.empty(nv)))
+        if not hasattr(self, "_z"):
+            self._z = np.empty(self.ndx)
+
+    def solve(self, r: np.ndarray, out: np.ndarray) -> None:
+        """out = (I − cJ)⁻¹ r (the factorised J)."""
+        c, Dinv, P, z, owned = self.c, self.Dinv, self.P, self._z, self._owned
+        for q0, nv, M, Gq, GF, lu, piv, rhs in self.blocks:
+            kern.owner_solve(r, out, owned, Dinv, c, q0, nv, M, Gq, GF.rows, GF.cols, GF.vals, P.rows, P.cols,
+                             P.vals, lu, piv, z, rhs)
+        if self.F.size:
+            kern.first_order_solve(r, out, owned, Dinv, c, P.rows, P.cols, P.vals, z)
+
+    def dense(self) -> np.ndarray:
+        """J as a dense (ndx × ndx) matrix, as the solve uses it (tests compare it with finite
+        differences)."""
+        n = self.ndx
+        J = np.zeros((n, n))
+        J[np.arange(n), np.arange(n)] = np.where(self._owned, 0.0, self.d)
+        np.add.at(J, (self.P.rows, self.P.cols), self.P.vals)
+        for s, mech in self.mech:
+            nv = s.second_order
+            q0 = s.dx.start
+            qs, vs = slice(q0, q0 + nv), slice(q0 + nv, q0 + 2 * nv)
+            J[qs, vs] += np.eye(nv)
+            Minv = np.linalg.inv(mech.M)
+            J[vs, qs] += Minv @ mech.Gq
+            J[vs, vs] += Minv @ mech.Gv
+            if mech.GF is not None:
+                G = np.zeros((nv, n))
+                np.add.at(G, (mech.GF.rows, mech.GF.cols), mech.GF.vals)
+                J[vs, :] += np.where(self._owned[None, :], 0.0, Minv @ G)
+        return J
+
+
+def _base(name):
+    from .component import Component
+    return getattr(Component, name)

@@ -1,0 +1,58 @@
+"""``snakesim robot urdf``: a design's URDF for any module count, with its screw meshes.
+
+A plugin command (registered by the built-in plugin, ``components/plugin.py``), not a framework
+one: the framework knows nothing about snake robots. The generator is the same one that writes the
+committed 10-module files (``python -m snakesim.robots.generate``).
+
+Layout written: ``FILE`` and, beside it, ``meshes/screw_*.stl``; the URDF names its meshes
+``meshes/<file>``, relative to itself, so the pair can be moved together and
+``snakesim run --urdf FILE`` (and the viewer) find them.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+#: how the generator names a mesh (urdf/ and meshes/ siblings) and how the written file names it
+GENERATED_MESH_DIR, WRITTEN_MESH_DIR = "../meshes/", "meshes/"
+
+
+def write_urdf(design: str, modules: int | None, head: bool | None, path: Path) -> tuple[Path, list[Path]]:
+    """Write ``design`` with ``modules`` modules to ``path`` and its screw meshes to ``path.parent/meshes``;
+    returns (the URDF, the meshes). ValueError/KeyError name a bad design or module count."""
+    from .description import generate_robot
+    from .screw_mesh import write_screw_mesh
+
+    robot = generate_robot(design, modules=modules, head=head)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    text = robot.urdf.replace(f'filename="{GENERATED_MESH_DIR}', f'filename="{WRITTEN_MESH_DIR}')
+    path.write_text(text, encoding="utf-8")
+    mesh_dir = path.parent / WRITTEN_MESH_DIR
+    if robot.screw_meshes:
+        mesh_dir.mkdir(exist_ok=True)
+    meshes = [write_screw_mesh(mesh_dir, g) for g in robot.screw_meshes.values()]
+    return path, meshes
+
+
+@click.group("robot")
+def robot():
+    """Robot descriptions: write a design's URDF for N modules, with its meshes."""
+
+
+@robot.command("urdf")
+@click.option("--robot", "design", required=True,
+              help="Design: eels-concept, eels-1.0, eels-1.0-front, eels-1.5, mini-eels-1.0.")
+@click.option("--modules", type=int, default=None, help="Number of modules (default: the design's).")
+@click.option("--head/--no-head", default=None, help="Perception head / head cap on or off (default: the design's).")
+@click.option("-o", "--output", required=True, type=click.Path(dir_okay=False, path_type=Path),
+              help="URDF file to write; its meshes go to meshes/ beside it.")
+def urdf_command(design, modules, head, output):
+    """Write DESIGN's URDF with N modules to FILE (use it with `snakesim run --urdf FILE --robot DESIGN`)."""
+    try:
+        path, meshes = write_urdf(design, modules, head, output)
+    except (KeyError, ValueError) as e:
+        raise click.ClickException(str(e.args[0]) if e.args else str(e)) from None
+    where = f" and {len(meshes)} screw mesh(es) in {path.parent / WRITTEN_MESH_DIR}" if meshes else ""
+    click.echo(f"wrote {path}{where}", err=True)
