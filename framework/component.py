@@ -251,6 +251,13 @@ class Component(Generic[P]):
     def update(self, t: float, xd, u) -> None:
         raise NotImplementedError(f"{type(self).__name__} declares discrete state but no update()")
 
+    def add_inputs(self, ports: dict) -> None:
+        """Per-instance inputs, made in ``setup()`` from the params (a sink's one input per signal or
+        sensor it reads): named by their keys, added to the class's ports for this instance only."""
+        for name, port in ports.items():
+            port.name = name
+        self.inputs = {**type(self).inputs, **ports}
+
     def hold(self, t: float, u) -> None:
         """Optional: called once per base step, after the discrete updates of tick t and before the
         integrator advances past t; it may block (a gate that holds the step loop: pause, single

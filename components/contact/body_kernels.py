@@ -21,23 +21,9 @@ from numba import njit
 
 from ..kernel_args import record
 from .kernels_numba import add_wrench, point_contact_force
-from .sdf_kernels import np_sum, plane_active, plane_query, sample_points
+from .sdf_kernels import _rot, np_sum, plane_active, plane_query, sample_points  # _rot: a link's axes from its quaternion
 
 K, C, MU = 0, 1, 2
-
-
-@njit(cache=True, inline="always")
-def _rot(poses, b, R):
-    x, y, z, w = poses[b, 3], poses[b, 4], poses[b, 5], poses[b, 6]
-    R[0, 0] = 1 - 2 * (y * y + z * z)
-    R[0, 1] = 2 * (x * y - z * w)
-    R[0, 2] = 2 * (x * z + y * w)
-    R[1, 0] = 2 * (x * y + z * w)
-    R[1, 1] = 1 - 2 * (x * x + z * z)
-    R[1, 2] = 2 * (y * z - x * w)
-    R[2, 0] = 2 * (x * z - y * w)
-    R[2, 1] = 2 * (y * z + x * w)
-    R[2, 2] = 1 - 2 * (x * x + y * y)
 
 
 @njit(cache=True)

@@ -56,12 +56,8 @@ class Ros2SensorBridge(Component[Ros2SensorBridgeParams]):
         if p.bases and len(p.bases) != len(p.sensors):
             raise ValueError(f"{self.name}: bases has {len(p.bases)} entries for {len(p.sensors)} sensors")
         self.bases = list(p.bases) or ["/" + s.replace(".", "/") for s in p.sensors]
-        extra = {}
-        for i, _ in enumerate(p.sensors):
-            port = Input(type=object)
-            port.name = sensor_input_name(i)
-            extra[port.name] = port
-        self.inputs = {**type(self).inputs, **extra}
+        self.add_inputs({sensor_input_name(i): Input(type=object, doc=f"{ref}: a LidarScan or a CameraFrame")
+                         for i, ref in enumerate(p.sensors)})
 
     def make_cache(self, x, u, y):
         return BridgeRun(last=[None] * len(self.p.sensors))

@@ -152,17 +152,11 @@ class RerunSink(Component[RerunSinkParams]):
         robot = self.robot
         self.links = robot.links if robot is not None else ()
         # series inputs are per instance: one numeric input of any shape per signal
-        extra = {}
-        for i, _ in enumerate(p.series):
-            port = Input(shape=None, unit=None, default=np.zeros(0))
-            port.name = series_input_name(i)
-            extra[port.name] = port
-        # sensor inputs too: one structured input per sensor output drawn (LidarScan or CameraFrame)
-        for i, ref in enumerate(p.sensors):
-            port = Input(type=object, doc=f"{ref}: a LidarScan or a CameraFrame")
-            port.name = sensor_input_name(i)
-            extra[port.name] = port
-        self.inputs = {**type(self).inputs, **extra}
+        # and sensor inputs: one structured input per sensor output drawn (LidarScan or CameraFrame)
+        self.add_inputs({**{series_input_name(i): Input(shape=None, unit=None, default=np.zeros(0))
+                            for i in range(len(p.series))},
+                         **{sensor_input_name(i): Input(type=object, doc=f"{ref}: a LidarScan or a CameraFrame")
+                            for i, ref in enumerate(p.sensors)}})
         self._period = 1.0 / (self.rate or p.viewer_rate)
         # the slow parts (mesh building, rerun's import: ~2 s) happen at build time, not in the run
         import rerun.blueprint  # noqa: F401
