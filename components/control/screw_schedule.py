@@ -103,6 +103,12 @@ class ScrewSchedule(Component[ScrewScheduleParams]):
         self._t = np.asarray(p.times, dtype=float)
         self._table = np.array([base] + [phase_vector(names, s, base, groups, f"{self.name}: speeds[{k}]")
                                          for k, s in enumerate(p.speeds)])
+        limit = np.where(groups["all"], self.robot.velocity_limits(), np.inf)
+        over = np.argwhere(np.abs(self._table[1:]) > limit)
+        if over.size:
+            k, j = over[0]
+            raise ValueError(f"{self.name}: speeds[{k}]: screw joint '{names[j]}' at {self._table[k + 1, j]:g} rad/s "
+                             f"exceeds its URDF velocity limit {limit[j]:g} rad/s (the motor cannot follow it)")
 
     def make_cache(self, x, u, y):
         """The phase the outputs hold (-1: none yet): they are rewritten only when it changes."""

@@ -140,6 +140,11 @@ class RobotModel:
         e = np.array([self.tree.joint_by_name[j].effort for j in self.joints], dtype=float)
         return np.where(e > 0, e, np.inf)
 
+    def velocity_limits(self) -> np.ndarray:
+        """URDF <limit velocity> per DOF joint, rad/s; +inf where the URDF gives none."""
+        v = np.array([self.tree.joint_by_name[j].velocity for j in self.joints], dtype=float)
+        return np.where(v > 0, v, np.inf)
+
     def cuts(self, patterns) -> tuple[list[str], list[str]]:
         """(joint names, child links) of the cuts named by ``patterns``: joint names, link names (their parent
         joint) or glob patterns of either, in the order given; an error lists the joints."""

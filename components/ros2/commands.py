@@ -134,6 +134,7 @@ class Ros2Commands(Component[Ros2CommandsParams]):
 
     def setup(self):
         p, robot = self.p, self.robot
+        self.velocity_limit = robot.velocity_limits()
         if self.rate is None:
             raise ValueError(f"{self.name}: ros2_commands needs a rate (Hz): it polls its topics at each tick")
         names = list(robot.joints)
@@ -186,6 +187,9 @@ class Ros2Commands(Component[Ros2CommandsParams]):
                     raise Rejected(f"{topic}: {field}[{k}] ({names[k]}) = {v} is not finite")
                 if abs(v) > limit:
                     raise Rejected(f"{topic}: {field}[{k}] ({names[k]}) = {v:g} is out of range (|value| <= {limit:g})")
+                if field == where[2] and abs(v) > self.velocity_limit[idx[k]]:
+                    raise Rejected(f"{topic}: {field}[{k}] ({names[k]}) = {v:g} rad/s exceeds the joint's URDF velocity "
+                                   f"limit {self.velocity_limit[idx[k]]:g} rad/s (the motor cannot follow it)")
             arrays[field] = np.array(values, dtype=float) if values else None
         pos, vel = arrays[where[1]], arrays[where[2]]
         idx = np.array(idx, dtype=np.intp)

@@ -119,6 +119,8 @@ MALFORMED = [
     ("later point NaN", "/joint_commands", lambda j: _traj([j[0]], [[0.1], [math.nan]]),
      "points[1].positions[0] (%s) = nan is not finite"),
     ("repeated joint", "/joint_command", lambda j: _js([j[0], j[0]], position=[0.1, 0.2]), "name[1] = '%s' appears twice"),
+    ("above the velocity limit", "/joint_command", lambda j: _js([j[0]], position=[0.1], velocity=[5.0]),
+     "velocity[0] (%s) = 5 rad/s exceeds the joint's URDF velocity limit 1 rad/s"),
 ]
 
 

@@ -44,6 +44,7 @@ def test_schedule_switches_phases_and_groups_split_the_modules():
     ({"times": [1.0, 2.0], "speeds": [{"all": 1.0}]}, "times has 2 entries but speeds has 1"),
     ({"times": [2.0, 1.0], "speeds": [{"all": 1.0}, {"all": 2.0}]}, "increase strictly"),
     ({"times": [1.0], "speeds": [{"all": math.inf}]}, "finite"),
+    ({"times": [1.0], "speeds": [{"all": 12.0}]}, "at 12 rad/s exceeds its URDF velocity limit 10 rad/s"),
 ])
 def test_schedule_rejects_bad_phases_with_a_clear_error(params, message):
     with pytest.raises((ValueError, ValidationError), match=message):
