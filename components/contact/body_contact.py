@@ -23,6 +23,10 @@ Accuracy: k is per sample, as in both other back ends (a face resting on n sampl
 F/(n k)); a curved surface rests on its samples' polygon, which lies inside the true
 surface by at most the sag r(1 − cos(π/n_around)) (body_samples.py).
 
+Watch (``max_depth``): a sample deeper than max_depth in the terrain ends the run with a
+named reason (a bounce from a step too large for k, or a material too soft), never
+believable garbage.
+
 Broad phase (``broad_phase``): one bounding sphere per piece (collision element) against
 ``terrain.distance_lower_bound``; only pieces whose bound is ≤ 0 are sampled and queried.
 A plane is queried inside numba in one call.
@@ -92,6 +96,10 @@ class BodyContactParams(Params):
     ev_floor: float = Field(EV_FLOOR, gt=0, description="smallest admissible along/across ratio")
     broad_phase: bool = True
     margin: float = Field(0.0, ge=0, description="m added to each piece's bounding sphere")
+    max_depth: float | None = Field(0.03, gt=0, description="m; a sample deeper in the terrain stops the run "
+                                                            "(a step too large or a material too soft: the "
+                                                            "weight sinks a body by F/k, about a millimetre); "
+                                                            "None: no watch")
 
     @model_validator(mode="after")
     def _ratios_above_floor(self):
@@ -143,6 +151,12 @@ class BodyContact(Component[BodyContactParams]):
             skin_ratio=np.array([k.along / k.across for k in skins], dtype=np.float64),
             v_eps=p.v_eps, mode=MODES[p.regularisation], ev_floor=p.ev_floor)
 
+    def stiffness_hint(self, u, readers):
+        """Penalty contact on the lightest sampled link, one point at once (:mod:`.stiffness_hint`)."""
+        from .stiffness_hint import penalty_modes
+
+        return penalty_modes(self, u, [(int(r), 1) for r in set(self.samples.piece_link.tolist())], "contact point")
+
     def _skin(self, link: str) -> Skin:
         for pat, skin in self.p.link_friction.items():
             if fnmatch.fnmatch(link, pat):
@@ -159,6 +173,15 @@ class BodyContact(Component[BodyContactParams]):
         if u.terrain is not c.terrain:
             c.use_terrain(self, u.terrain)
         c.step()
+        m = int(c.counts[4])
+        if m and self.p.max_depth is not None:
+            deepest = -float(c.distance[:m].min())
+            if deepest > self.p.max_depth:
+                k = int(c.distance[:m].argmin())
+                link = self.robot.links[self.samples.piece_link[c.owner[k]]]
+                self.stop(f"contact on link '{link}' is {deepest * 1e3:.3g} mm deep at t = {t:.6g} s, beyond "
+                          f"max_depth = {self.p.max_depth * 1e3:g} mm: the step is too large for the contact "
+                          f"stiffness (see the run's step_check) or the material too soft")
 
     def calc_contact_set(self, t, x, u, y):
         c = u.cache

@@ -227,3 +227,20 @@ def test_unconnected_terrain_is_explained():
     h = Harness(BodyContact, {}, uses={"robot": robot})
     with pytest.raises(ValueError, match="carries no Terrain"):
         h.outputs()
+
+
+def test_a_contact_deeper_than_max_depth_stops_the_run_naming_the_link():
+    """A body pushed 4 cm into the ice (a bounce from a step too large for k) ends the run with a
+    reason, where 2 cm under max_depth = 3 cm does not (the watch reads the deepest sample)."""
+    urdf = _urdf(CYL, ALONG_X)
+    for depth, stops in ((0.02, False), (0.04, True)):
+        mb = Harness(Multibody, {"urdf": urdf, "base_position": (0.0, 0.0, 0.05 - depth)})
+        bc = Harness(BodyContact, {"spacing": 0.05}, uses={"robot": mb.c.robot})
+        bc.inputs.terrain = _plane()
+        o = mb.outputs()
+        bc.inputs.link_poses, bc.inputs.link_velocities = o["link_poses"], o["link_velocities"]
+        bc.outputs()
+        reason = bc.c._stop.reason
+        assert (reason is not None) == stops, reason
+        if stops:
+            assert "link 'body'" in reason and "40 mm deep" in reason and "max_depth = 30 mm" in reason
