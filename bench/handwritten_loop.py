@@ -44,7 +44,8 @@ import click  # noqa: E402
 import numpy as np  # noqa: E402
 import pinocchio as pin  # noqa: E402
 
-from snakesim.components.contact.sdf_kernels import SdfPorts, SdfWork, Surface, plane_step  # noqa: E402
+from snakesim.components.contact.sdf_kernels import (SdfPorts, SdfWork, Surface, plane_extremal_step,  # noqa: E402
+                                                      plane_step)
 from snakesim.components.control.pid_kernel import PidRun, pid_step  # noqa: E402
 from snakesim.components.kernel_args import bind  # noqa: E402
 from snakesim.components.multibody.kernels import Kin, Ports, force_step, state_step  # noqa: E402
@@ -88,7 +89,7 @@ class HandLoop:
         mb, pid, sc, c = self.mb, self.pid, self.sched, self.contact
         lay, terrain = c.screws, self.terrain
         model, data = mb.dyn.model, mb.dyn.data
-        nq, nv, nl, nj, ns, n = mb._nq, mb._nv, len(mb.robot.links), len(mb.robot.joints), lay.ns, c.n_samples
+        nq, nv, nl, nj, ns, n = mb._nq, mb._nv, len(mb.robot.links), len(mb.robot.joints), lay.ns, c.n_rows
         z = np.zeros
         x = self.X0["robot"].copy()
         xp = self.X0["pid"].copy()
@@ -108,8 +109,10 @@ class HandLoop:
         work = SdfWork(active=z(ns, dtype=np.int64), centres=z((ns, 3)), points=z((n, 3)), distance=z(n),
                        normal=z((n, 3)), material=z(n, dtype=np.int64), sample=z(n, dtype=np.int64),
                        owner=z(n, dtype=np.int64), R=z((3, 3)), point=z((n, 3)), vel=z((n, 3)), force=z((n, 3)),
-                       fn=z(n), counts=z(5, dtype=np.int64), track=False, seen_poses=z((nl, 7)),
-                       seen_vels=z((nl, 6)), seen_joint_v=z(nj))
+                       fn=z(n), counts=z(7, dtype=np.int64), track=False, seen_poses=z((nl, 7)),
+                       seen_vels=z((nl, 6)), seen_joint_v=z(nj), ring_row=z(n, dtype=np.int64), ring_dir=z((n, 3)),
+                       ext_points=z((c.n_rings, 3)), ext_row=z(c.n_rings, dtype=np.int64), ext_distance=z(c.n_rings),
+                       ext_normal=z((c.n_rings, 3)), ext_material=z(c.n_rings, dtype=np.int64))
         contact_ports = SdfPorts(poses=poses, vels=vels, joint_v=jv, wrenches=W, screw_fn=z(ns), normal_force=z(1),
                                  contacts=z(1))
         surface = Surface(origin=np.array(terrain.origin, dtype=float), n=np.array(terrain.n, dtype=float),
@@ -118,7 +121,7 @@ class HandLoop:
         force = bind(force_step, mb._tree, kin, ports)
         law = bind(pid_step, pid._gains, PidRun(setpoint=setpoint, rate_ref=zero_nj, tau_ff=zero_nj, q=jq, v=jv,
                                                 x=xp, tau=tau, err=err, dint=dint, zrate=zrate))
-        contact = bind(plane_step, c._samples, work, contact_ports, surface)
+        contact = bind(plane_extremal_step if c.exact else plane_step, c._samples, work, contact_ports, surface)
         times, table = sc._t, sc._table
         tail_i, tail_axis = self.tail._i, self.tail._axis
         dt = self.dt

@@ -11,13 +11,18 @@ time, and whether the run completed.
                                       [--method ros2] [--dt 0.001] [--duration 2] [--repeats 2] [--json FILE]
 
 Each row also times MuJoCo's screw snake with as many modules in this process
-(../shared/peers/mujoco_snake.py; bench/mujoco_anchor.py) and prints the ratio, and the
-process's peak resident memory.
+(../shared/peers/mujoco_snake.py; bench/mujoco_anchor.py) and prints the ratio, the
+process's peak resident memory (``peak_rss_mb``: rows run in ascending module count), and
+the peak of ``snakesim check --modules N`` in a child process of its own
+(``check_peak_mb``, the child's own VmHWM). Issue 13's target: ≤ 1 GB at 100 modules.
+Measured (2-core shared machine, /usr/bin/time): 100 modules, ``check`` 6.56 -> 1.19 GB,
+a run 2.05 -> 1.29 GB (the rest is the one Data's 0.92 GB of nv³ tensors,
+components/multibody/model.py ``new_data``); ``check --baseline`` 3.4 GB.
 
 Targets (issue 6): ≥ 10x real time at 10 modules, ≥ 1.5x at 100 modules. Reference
 figures from the issue: MuJoCo ~17-25x at 10 modules but 0.17x at 100; a hand-written
 Pinocchio + numpy loop ~8x at 10 and 1.7x at 100. At 100 modules Pinocchio 4.1's Data
-takes ~2 GB and a few seconds to build (components/multibody/component.py).
+takes ~0.9 GB and a few seconds to build (components/multibody/model.py ``new_data``).
 """
 
 from __future__ import annotations
@@ -33,6 +38,7 @@ import platform  # noqa: E402
 import time  # noqa: E402
 
 import resource  # noqa: E402
+import subprocess  # noqa: E402
 import sys  # noqa: E402
 from pathlib import Path  # noqa: E402
 
@@ -45,6 +51,21 @@ from mujoco_anchor import mujoco_rtf  # noqa: E402
 
 SCENE = "surface-screw-traverse"
 TARGETS = {10: 10.0, 100: 1.5}
+
+
+def check_peak_mb(modules: int) -> float | None:
+    """Peak resident memory, MB, of ``snakesim check SCENE --modules N`` in a child process: its own
+    VmHWM (/proc/self/status), read as it exits. Not the child's getrusage ru_maxrss: Linux carries
+    the parent's high-water mark across fork and exec, so that would report this process's peak."""
+    code = ("import sys\nfrom snakesim.framework.cli import main\nsys.argv[0] = 'snakesim'\ntry:\n    main()\n"
+            "finally:\n    hwm = [ln for ln in open('/proc/self/status') if ln.startswith('VmHWM:')]\n"
+            "    sys.stderr.write('\\n' + (hwm[0] if hwm else 'VmHWM: nan kB\\n'))\n")
+    proc = subprocess.run([sys.executable, "-c", code, "check", SCENE, "--modules", str(modules)],
+                          stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    lines = [ln for ln in proc.stderr.splitlines() if ln.startswith("VmHWM:")]
+    if proc.returncode != 0 or not lines:
+        return None
+    return float(lines[-1].split()[1]) / 1024.0
 
 
 def scene_row(modules: int, integrator: str, dt: float, duration: float, repeats: int, params: dict) -> dict:
@@ -70,6 +91,7 @@ def scene_row(modules: int, integrator: str, dt: float, duration: float, repeats
             "us_per_step": best["wall_time_s"] / max(1, best["steps"]) * 1e6, "build_s": build,
             "completed": best["completed"], "target_rtf": TARGETS.get(modules),
             "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,
+            "check_peak_mb": check_peak_mb(modules),
             "mujoco_rtf": mujoco_rtf(modules, dt if dt <= 2e-3 else 2e-3, duration=min(duration, 2.0))}
 
 
@@ -86,10 +108,10 @@ def main(modules, integrator, dt, duration, repeats, method, json_path):
     rows = [scene_row(int(m), integrator, dt, duration, repeats, params) for m in sorted(map(int, modules.split(",")))]
     print(f"{SCENE}, {integrator}{params or ''} at dt = {dt * 1e3:g} ms, {duration:g} s simulated, best of {repeats}")
     print("MuJoCo: its screw snake with as many modules, timed in this process (Euler at min(dt, 2 ms));\n"
-          "peak RSS: the process's peak so far (rows run in ascending module count, so a row's figure is its own\n"
-          "peak unless an earlier row's was higher)")
+          "peak MB: the process's peak so far (rows run in ascending module count, so a row's figure is its own\n"
+          "peak unless an earlier row's was higher); check MB: `snakesim check --modules N`'s peak, its own process")
     print(f"{'modules':>7s} {'nv':>5s} {'build s':>8s} {'wall s':>8s} {'us/step':>9s} {'RTF':>7s} {'target':>7s} "
-          f"{'MuJoCo':>7s} {'ratio':>6s} {'peak MB':>8s}")
+          f"{'MuJoCo':>7s} {'ratio':>6s} {'peak MB':>8s} {'check MB':>8s}")
     for r in rows:
         tgt = f"{r['target_rtf']:g}" if r["target_rtf"] else "-"
         flag = "" if r["completed"] else "  (did not complete)"
@@ -98,7 +120,8 @@ def main(modules, integrator, dt, duration, repeats, method, json_path):
         mj = r["mujoco_rtf"]
         mjs, ratio = (f"{mj:7.2f}", f"{r['real_time_factor'] / mj:6.2f}") if mj else (f"{'-':>7s}", f"{'-':>6s}")
         print(f"{r['modules']:7d} {r['nv']:5d} {r['build_s']:8.2f} {r['wall_time_s']:8.3f} {r['us_per_step']:9.1f} "
-              f"{r['real_time_factor']:7.2f} {tgt:>7s} {mjs} {ratio} {r['peak_rss_mb']:8.0f}{flag}")
+              f"{r['real_time_factor']:7.2f} {tgt:>7s} {mjs} {ratio} {r['peak_rss_mb']:8.0f} "
+              f"{r['check_peak_mb'] or float('nan'):8.0f}{flag}")
     if json_path:
         with open(json_path, "w") as fh:
             json.dump({"machine": platform.processor() or platform.machine(), "python": platform.python_version(),

@@ -16,10 +16,12 @@ def builtin_components() -> tuple:
     from .control.screw_drive import ScrewDrive
     from .contact.screw_sdf import ScrewSdfContact
     from .contact.body_contact import BodyContact
-    from .control import CsvTrajectory, JointPid, JointSetpoints, JointSpringDamper, Schedule, SerpenoidGait
+    from .control import CsvTrajectory, HelicalGait, JointPid, JointSetpoints, JointSpringDamper, Schedule, SerpenoidGait
     from .examples.mass_spring import PointMass, SpringDamper
     from .examples.pendulum import Pendulum, ViscousDamper
     from .monitors import MobilityMonitor
+    from .monitors.vertical_mobility import VerticalMobilityEvaluation
+    from .control.brace_climb import BraceClimb
     from .monitors.planar_pose import PlanarPose
     from .control.screw_schedule import ScrewSchedule
     from .multibody import Multibody
@@ -36,8 +38,8 @@ def builtin_components() -> tuple:
 
     return (Constant, Step, Sine, Gain, Sum, ZeroOrderHold, Pendulum, ViscousDamper, PointMass, SpringDamper,
             PointContact, HullContact, TerrainSource, Multibody, ScrewSdfContact, BodyContact, ScrewDrive,
-            JointPid, JointSpringDamper, JointSetpoints, SerpenoidGait, CsvTrajectory, Schedule, ForceTorqueSensors,
-            Imu, Tethers, WrenchSum, MobilityMonitor, RerunSink, PlanarPose, ScrewSchedule, Ros2Publisher,
+            JointPid, JointSpringDamper, JointSetpoints, SerpenoidGait, HelicalGait, CsvTrajectory, Schedule, ForceTorqueSensors,
+            Imu, Tethers, WrenchSum, MobilityMonitor, VerticalMobilityEvaluation, BraceClimb, RerunSink, PlanarPose, ScrewSchedule, Ros2Publisher,
             Ros2Commands, Ros2SensorBridge, Ros2SimControl, Ros2McapRecorder, Ros2TetherCommands,
             *PLACEMENT, *PERCEPTION)
 

@@ -10,12 +10,14 @@ from __future__ import annotations
 
 import importlib
 import json
+import signal
 import sys
 from pathlib import Path
 
 import click
 
 from .errors import SnakesimError
+from .run_reports import report_lines
 
 # registry, assembly and session load inside the commands: `snakesim --help` must not pay for
 # numpy, pydantic and every component (bench/cli_startup.py measures it)
@@ -132,42 +134,120 @@ def cli():
 @click.option("--dt", type=float, callback=_positive, help="Base step, s.")
 @click.option("--integrator", help="semi_implicit_euler, rk4, dopri5, rosenbrock2, rosenbrock_w or a plugin's.")
 @click.option("--realtime/--no-realtime", default=None, help="Pace simulated time to the wall clock.")
-@click.option("--out", "out_dir", type=click.Path(file_okay=False), help="Write signals.csv, summary.json, config.yaml here.")
+@click.option("--out", "out_dir", type=click.Path(file_okay=False),
+              help="Write signals.csv, summary.json, config.yaml here (a new or empty folder; see --overwrite).")
+@click.option("--overwrite", is_flag=True, default=None,
+              help="Let --out name a folder that holds files already: the run's files in it are replaced.")
 @click.option("--save-config", type=click.Path(dir_okay=False), help="Write the full resolved configuration here.")
 @click.option("--quiet", is_flag=True, help="No progress or summary on the terminal.")
-def run(assembly, config, sets, duration, dt, integrator, realtime, out_dir, save_config, quiet, **shorthands):
-    """Run ASSEMBLY (a YAML path or a scene name; default: the default scene)."""
-    try:
-        s = _session(assembly, config, sets, shorthands, duration=duration, dt=dt, integrator=integrator, realtime=realtime)
-        if save_config:
-            Path(save_config).write_text(s.config_text())
-        if not quiet:
-            click.echo(f"running {s.resolved.source}: {s.resolved.sim.duration:g} s at dt = {s.resolved.sim.dt:g} s "
-                       f"with {s.integrator.name}", err=True)
-        result = s.run(out_dir=out_dir, progress=None if quiet else _progress())
-    except SnakesimError as e:
-        _fail(e)
+def run(assembly, config, sets, duration, dt, integrator, realtime, out_dir, overwrite, save_config, quiet,
+        **shorthands):
+    """Run ASSEMBLY (a YAML path or a scene name; default: the default scene).
+
+    Ctrl-C or SIGTERM ends the run at the next step and still writes --out (the summary says it was
+    interrupted, and when); a second one stops at once."""
+    from .run_files import check_writable_file, prepare_out_dir
+
+    with _Interrupts() as interrupts:
+        try:
+            # where the run writes is checked before anything is built or run
+            if out_dir:
+                prepare_out_dir(out_dir, overwrite=bool(overwrite))
+            if save_config:
+                check_writable_file(save_config, "--save-config")
+            s = _session(assembly, config, sets, shorthands, duration=duration, dt=dt, integrator=integrator,
+                         realtime=realtime)
+            interrupts.attach(s)
+            if save_config:
+                try:
+                    Path(save_config).write_text(s.config_text())
+                except OSError as e:
+                    raise SnakesimError(f"--save-config {save_config}: cannot write there ({e.strerror or e})") from None
+            if not quiet:
+                click.echo(f"running {s.resolved.source}: {s.resolved.sim.duration:g} s at dt = {s.resolved.sim.dt:g} s "
+                           f"with {s.integrator.name}", err=True)
+            result = s.run(out_dir=out_dir, progress=None if quiet else _progress())
+        except SnakesimError as e:
+            _fail(e)
+        except KeyboardInterrupt:       # a second Ctrl-C: stop at once
+            click.echo(f"\ninterrupted twice: stopped at once{'' if not out_dir else f'; {out_dir} may be incomplete'}",
+                       err=True)
+            sys.exit(130)
+    sm = result.summary
     if not quiet:
-        sm = result.summary
         click.echo(f"\r{' ' * 70}\r{sm['stop_reason']}: {sm['sim_time_s']:.4g} s simulated in {sm['wall_time_s']:.3g} s "
                    f"({sm['real_time_factor']:.3g}x real time, {sm['steps']} steps)", err=True)
+        for line in report_lines(s.plan, sm):     # components' end-of-run reports (framework/run_reports.py)
+            click.echo(line, err=True)
         if out_dir:
-            click.echo(f"wrote {out_dir}/signals.csv, summary.json, config.yaml", err=True)
+            extra = ", last_good_state.npz" if result.last_good_state is not None else ""
+            click.echo(f"wrote {out_dir}/signals.csv, summary.json, config.yaml{extra}", err=True)
+    if not out_dir and (result.last_good_state is not None or "interrupted" in sm):
+        # said even with --quiet: the run did not complete and nothing of it is kept
+        what = "the signals so far and the last good state" if result.last_good_state is not None else "the signals so far"
+        click.echo(f"{sm['stop_reason']}: nothing was saved (no --out); run again with --out DIR to keep {what}, "
+                   "a summary and the config", err=True)
+    if "interrupted" in sm:
+        sys.exit(128 + int(getattr(signal, sm["interrupted"]["signal"])))
     if result.last_good_state is not None:  # blew up or the integrator gave up
         sys.exit(3)
+
+
+class _Interrupts:
+    """SIGINT and SIGTERM during ``run``: the first ends the run at the next step boundary (before the run
+    starts: at its first step, once the build is done), so the run is written; a second one gets the
+    signal's default action (Ctrl-C: stop at once). Signals the caller ignores stay ignored."""
+
+    def __init__(self):
+        self.session, self.signal, self.old = None, None, {}
+
+    def __enter__(self):
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            try:
+                if signal.getsignal(sig) is not signal.SIG_IGN:
+                    self.old[sig] = signal.signal(sig, self._handle)
+            except ValueError:      # not the main thread (an embedding caller): no handlers
+                pass
+        return self
+
+    def _handle(self, signum, frame):
+        self._restore()
+        self.signal = signal.Signals(signum).name
+        if self.session is not None:
+            self.session.interrupt(self.signal)
+        else:
+            sys.stderr.write(f"\n{self.signal}: the run will stop at its first step, once the build is done "
+                             "(send it again to stop at once)\n")
+
+    def attach(self, session) -> None:
+        self.session = session
+        if self.signal is not None:
+            session.interrupt(self.signal)
+
+    def _restore(self):
+        for sig, old in self.old.items():
+            signal.signal(sig, old)
+        self.old = {}
+
+    def __exit__(self, *exc):
+        self._restore()
+        return False
 
 
 @cli.command()
 @click.argument("assembly", required=False)
 @scene_options
 @click.option("--json", "as_json", is_flag=True, help="Machine-readable report.")
-def check(assembly, config, sets, as_json, **shorthands):
+@click.option("--baseline", is_flag=True,
+              help="Also build and time the unoptimised baselines (the multibody optimisation's cost; "
+                   "at 100 modules about a GB and seconds).")
+def check(assembly, config, sets, as_json, baseline, **shorthands):
     """Build ASSEMBLY and report it without running."""
     try:
         s = _session(assembly, config, sets, shorthands)
     except SnakesimError as e:
         _fail(e)
-    r = s.report(detail=True)
+    r = s.report(detail=True, baseline=baseline)
     if as_json:
         click.echo(json.dumps(r, indent=2, default=str))
         return
@@ -277,5 +357,7 @@ def install_plugin_cli(registry=None) -> click.Group:
 
 
 def main():
+    from .blas_threads import pin_blas_threads
+    pin_blas_threads()      # one BLAS thread unless SNAKESIM_BLAS_THREADS says otherwise: before numpy loads
     # plugins install on demand (_SnakesimGroup): the top-level help loads only their commands' names
     cli(prog_name="snakesim")

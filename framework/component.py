@@ -308,8 +308,16 @@ class Component(Generic[P]):
         matrix and generalised-force derivatives), asking ``lin`` for its inputs' derivatives."""
         return None
 
-    def build_report(self) -> dict | None:
-        """Extra facts for ``snakesim check`` (e.g. a model optimisation); may be costly, asked on demand."""
+    def stiffness_hint(self, u, readers) -> list[tuple[float, str]]:
+        """The stiffest modes this component sets, as (ω in rad/s, what) pairs, checked once before the
+        first step against the integrator's stability bound (:mod:`.stiffness`); ``u`` its inputs (the
+        time-invariant ones already computed), ``readers(port)`` the components reading one of its outputs."""
+        return []
+
+    def build_report(self, baseline: bool = False) -> dict | None:
+        """Extra facts for ``snakesim check`` (e.g. a model optimisation), asked on demand. ``baseline``
+        (``check --baseline``): also what costs extra models, memory or timing (the multibody's
+        unoptimised baselines); without it the report builds nothing big."""
         return None
 
     # -- services ------------------------------------------------------------

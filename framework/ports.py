@@ -8,6 +8,9 @@ string to the framework, e.g. "link_poses" or "joint_positions"): sinks such
 as a viewer or a ROS publisher find ports by role or structured type, never
 by guessing from port names.
 
+``may_be_nan`` (outputs) declares NaN a value of the port ("not defined yet"): the run's
+non-finite checks of recorded and sink-read outputs let it through, never ±inf.
+
 ``feedthrough`` lists the inputs an output depends on directly (``True`` for
 all, ``()`` for none: a function of state only). The scheduler orders
 evaluations and rejects algebraic loops from it. ``calc`` names a method that
@@ -71,10 +74,13 @@ class Output(Port):
 
     def __init__(self, shape: ShapeSpec = (), *, unit: str | None = "1", dtype: Any = np.float64,
                  type: type | None = None, names=None, feedthrough: bool | tuple[str, ...] = True,
-                 calc: str | None = None, doc: str = "", role: str | None = None):
+                 calc: str | None = None, doc: str = "", role: str | None = None, may_be_nan: bool = False):
         super().__init__(shape, unit=unit, dtype=dtype, type=type, names=names, doc=doc, role=role)
         self.feedthrough = feedthrough
         self.calc = calc
+        #: NaN is a value of this port, meaning "not defined (yet)" (a settle time before the latch, "no
+        #: command"); the run's non-finite checks let NaN through here, never ±inf
+        self.may_be_nan = may_be_nan
 
     def feedthrough_inputs(self, input_names: list[str]) -> tuple[str, ...]:
         if self.feedthrough is True:

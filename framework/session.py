@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import datetime
 from pathlib import Path
 
 from .assembly import Resolved, resolve
 from .errors import ConfigError
 from .plan import Plan, build
 from .registry import Registry, default_registry
+from .run_reports import add_reports
+from .run_files import prepare_out_dir
 from .simulator import RunResult, Simulator, write_run
 from .yaml_source import dump_yaml
 
@@ -27,6 +30,7 @@ class Session:
         except Exception as e:
             raise ConfigError(f"bad parameters for integrator '{spec.name}': {e}", None, "sim.integrator.params") from None
         self.simulator = Simulator(self.plan, self.integrator)
+        self.interrupted: dict | None = None
 
     # -- views ----------------------------------------------------------------
     def config_dict(self) -> dict:
@@ -40,24 +44,40 @@ class Session:
     def config_text(self) -> str:
         return "# snakesim resolved configuration: run again with `snakesim run THIS_FILE`\n" + dump_yaml(self.config_dict())
 
-    def report(self, detail: bool = False) -> dict:
-        """The build report; ``detail`` adds each component's own ``build_report()``."""
+    def report(self, detail: bool = False, baseline: bool = False) -> dict:
+        """The build report; ``detail`` adds each component's own ``build_report()``, ``baseline`` asks
+        them for their costly extras too (``snakesim check --baseline``)."""
         r = dict(self.plan.report)
         r["integrator"] = self.integrator.name
         r["source"] = self.resolved.source
         if detail:
-            extra = {n: c.build_report() for n, c in self.plan.components.items()}
+            extra = {n: c.build_report(baseline=baseline) for n, c in self.plan.components.items()}
             r["component_reports"] = {n: rep for n, rep in extra.items() if rep}
         return r
 
     # -- running ---------------------------------------------------------------
     def run(self, out_dir: Path | None = None, progress=None, realtime: bool | None = None) -> RunResult:
+        """Run once; with ``out_dir`` (checked writable before the first step) write the run there. After
+        :meth:`interrupt` the run ends at the next step boundary and its summary says so."""
         sim = self.resolved.sim
+        if out_dir is not None:
+            prepare_out_dir(out_dir, overwrite=True)
         result = self.simulator.run(sim.duration, t0=sim.t0, progress=progress,
                                     realtime=sim.realtime if realtime is None else realtime)
+        if self.interrupted is not None:
+            result.summary["interrupted"] = {**self.interrupted, "at_sim_time_s": result.summary["t_end_s"]}
+        add_reports(self.plan, result.summary)          # components' report(cache, summary): framework/run_reports.py
         if out_dir is not None:
             write_run(Path(out_dir), result, self.config_text())
         return result
+
+    def interrupt(self, signal_name: str) -> None:
+        """Stop the run at the next step boundary (from a signal handler: SIGINT, SIGTERM); the summary gets
+        ``interrupted: {signal, wall_clock, at_sim_time_s}``."""
+        if self.interrupted is None:
+            self.interrupted = {"signal": signal_name,
+                                "wall_clock": datetime.datetime.now().astimezone().isoformat(timespec="seconds")}
+        self.simulator.request_stop(f"interrupted by {signal_name}", "signal")
 
 
 def load_session(assembly, *, config_files=(), overrides=(), sim_overrides=None,

@@ -14,7 +14,14 @@ At each base tick k (t = t0 + k·dt, never accumulated):
   4. the integrator advances the continuous state to t + dt, re-evaluating
      only the nodes continuous states depend on;
   5. non-finite state stops the run, naming the component, and keeps the last
-     good state.
+     good state; so do non-finite recorded outputs (checked as each row is
+     recorded) and non-finite outputs a sink is about to read (at its tick, before
+     its update), naming the component and port, and a linear-algebra failure
+     (``LinAlgError``) in a component or the integrator, naming which.
+
+``request_stop(reason)`` (a signal handler: Ctrl-C, SIGTERM) ends the run at the
+next step boundary like a component's stop, never inside a kernel; a request
+made before the run starts is kept for it.
 
 ``realtime`` paces simulated time to the wall clock; when the run falls behind
 by more than ``LAG_WARN_S`` it says so on logger ``snakesim.run`` (how far
@@ -36,8 +43,10 @@ from pathlib import Path
 import numpy as np
 
 from .errors import SnakesimError
+from .limits import step_count
 from .recorder import Recorder
 from .state_edit import StateEdit
+from .stiffness import step_check
 
 logger = logging.getLogger("snakesim.run")
 LAG_WARN_S = 0.1            # s behind the wall clock before a --realtime run warns
@@ -63,16 +72,26 @@ class Simulator:
         self.integrator = integrator
         # every run starts from the initial state (one session, many runs)
         self.X0, self.XD0 = plan.X.copy(), plan.XD.copy()
+        self.requested: tuple[str, str] | None = None      # (reason, source) from request_stop
+        self.sink_checks = _sink_checks(plan)
+        self.step_check: dict | None = None
+
+    def request_stop(self, reason: str, source: str = "run") -> None:
+        """End the run at the next step boundary (safe from a signal handler: it only sets the stop flag)."""
+        self.requested = (reason, source)
+        flag = self.plan.stop_flag
+        if flag.reason is None:
+            flag.reason, flag.source = reason, source
 
     def run(self, duration: float, t0: float = 0.0, progress=None, realtime: bool = False,
             out_dir: Path | None = None) -> RunResult:
         plan, integ = self.plan, self.integrator
         dt = plan.dt
-        n_steps = int(round(duration / dt))
+        n_steps = step_count(duration, dt)
         if n_steps < 1 or abs(n_steps * dt - duration) > 1e-9 * max(1.0, duration):
             raise SnakesimError(f"duration {duration:g} s is not a whole number of steps dt = {dt:g} s "
                                 f"(nearest: {max(1, n_steps) * dt:g} s)")
-        log = Recorder(plan.record_refs, plan, n_steps // plan.record_every + 1)
+        log = Recorder(plan.record_refs, plan, n_steps // plan.record_every + 1, duration)
         X, XD = plan.X, plan.XD
         np.copyto(X, self.X0)
         np.copyto(XD, self.XD0)
@@ -81,12 +100,15 @@ class Simulator:
         X_good, XD_good = X.copy(), XD.copy()
         for fn, x, u, y in plan.once:
             fn(t0, x, u, y)
+        if self.step_check is None:     # the stiffest mode vs the step: once (time-invariant inputs known now)
+            self.step_check = step_check(plan, integ) or {}
         has_cont, has_disc = plan.nx > 0, plan.XD.size > 0
         # each phase's evaluation: the major pass, then the derivatives (the integrator's first stage)
         passes = tuple(m + plan.derivs for m in plan.major) if has_cont else plan.major
         updates, n_phases, rec_every = plan.updates, plan.n_phases, plan.record_every
         stops, flag, DX, advance = plan.stops, plan.stop_flag, plan.DX, integ.advance
-        flag.reason = flag.source = None
+        flag.reason, flag.source = self.requested or (None, None)
+        sink_checks, record = self.sink_checks, log.record
         stop_reason, bad = None, None
         isfinite, copyto = math.isfinite, np.copyto
         holds, edits = plan.holds, plan.edits
@@ -102,10 +124,23 @@ class Simulator:
         for k in range(n_steps + 1):
             t = t0 + k * dt
             phase = k % n_phases
-            for fn, x, u, y in passes[phase]:
-                fn(t, x, u, y)
+            try:
+                for fn, x, u, y in passes[phase]:
+                    fn(t, x, u, y)
+            except (np.linalg.LinAlgError, FloatingPointError) as e:
+                stop_reason, bad = f"component {_name_of(fn)} failed at t = {t:.6g} s: {type(e).__name__}: {e}", True
+                break
             if k % rec_every == 0:
-                log.record(t)
+                bad_out = record(t)
+                if bad_out is not None:
+                    stop_reason, bad = f"{bad_out} at t = {t:.6g} s", True
+                    break
+            for what, v, nan_ok in sink_checks[phase]:
+                if not isfinite(v.dot(v)) and (np.isinf(v).any() if nan_ok else not np.isfinite(v).all()):
+                    stop_reason, bad = f"{what} at t = {t:.6g} s ({_bad_values(v)})", True
+                    break
+            if bad:
+                break
             for cond in stops:
                 if cond.hit():
                     stop_reason = f"stop condition: {cond.reason} at t = {t:.6g} s"
@@ -136,10 +171,11 @@ class Simulator:
             if has_cont:
                 try:
                     advance(t, t + dt, DX)
-                except (SnakesimError, FloatingPointError) as e:
-                    # e.g. an adaptive step collapsing: stop like a blow-up, keeping the last good state
+                except (SnakesimError, FloatingPointError, np.linalg.LinAlgError) as e:
+                    # e.g. an adaptive step collapsing, a singular matrix: stop like a blow-up, keeping the
+                    # last good state
                     bad = True
-                    stop_reason = f"integrator {integ.name} failed after t = {t:.6g} s: {e}"
+                    stop_reason = f"integrator {integ.name} failed after t = {t:.6g} s{_where(e)}: {_what(e)}"
                     break
             # X·X is finite iff every element is (an overflow to inf only sends it to the exact test)
             if has_disc:
@@ -187,6 +223,8 @@ class Simulator:
             "completed": stop_reason is None,
             "integrator": {"name": integ.name, **integ.stats} if has_cont else None,
         }
+        if self.step_check:
+            summary["step_check"] = self.step_check
         if holds:
             summary["held_wall_time_s"] = held
         if edits:
@@ -208,9 +246,9 @@ class Simulator:
         if plan.nx and not editor.resets:
             try:
                 integ.advance(t, t + dt, plan.DX)
-            except (SnakesimError, FloatingPointError) as e:
+            except (SnakesimError, FloatingPointError, np.linalg.LinAlgError) as e:
                 editor.requests.clear()
-                return f"integrator {integ.name} failed after t = {t:.6g} s: {e}", True
+                return f"integrator {integ.name} failed after t = {t:.6g} s{_where(e)}: {_what(e)}", True
         for line in editor.apply():
             logger.info("state edit at t = %.6g s: %s", t + dt, line)
         if not (np.isfinite(plan.X).all() and np.isfinite(plan.XD).all()):
@@ -230,15 +268,70 @@ class Simulator:
         return plan.component_of_xd(int(bad_d[0])), f"{bad_d.size} non-finite discrete state element(s)"
 
 
+def _sink_checks(plan) -> tuple[tuple[tuple[str, np.ndarray], ...], ...]:
+    """Per phase: (what, flat view, NaN allowed) of every floating-point output a sink reads at that
+    phase's tick."""
+    per_phase = []
+    periods = {n: c["period_steps"] for n, c in plan.report.get("components", {}).items()}
+    for phase in range(plan.n_phases):
+        seen: dict = {}
+        for dst, src in plan.sources.items():
+            comp = plan.components.get(dst.comp)
+            buf = plan.out_buffers.get(src)
+            if comp is None or not comp.is_sink or phase % periods.get(dst.comp, 1) or src in seen:
+                continue
+            if isinstance(buf, np.ndarray) and np.issubdtype(buf.dtype, np.inexact) and buf.size:
+                port = plan.components[src.comp].outputs.get(src.port)
+                seen[src] = (f"non-finite output '{src.comp}.{src.port}' of component '{src.comp}', read by "
+                             f"sink '{dst.comp}' ({dst.port})", buf.reshape(-1), getattr(port, "may_be_nan", False))
+        per_phase.append(tuple(seen.values()))
+    return tuple(per_phase)
+
+
+def _bad_values(v: np.ndarray) -> str:
+    bad = np.flatnonzero(~np.isfinite(v))
+    return f"{bad.size} of {v.size} element(s) non-finite, first [{bad[0]}] = {v[bad[0]]:g}"
+
+
+def _name_of(fn) -> str:
+    owner = getattr(fn, "__self__", None)
+    name = getattr(owner, "name", None)
+    return f"'{name}'" if name else repr(getattr(fn, "__qualname__", fn))
+
+
+def _where(e: BaseException) -> str:
+    """' in component NAME' for the innermost component method the exception passed through, or ''."""
+    from .component import Component
+
+    name, tb = None, e.__traceback__
+    while tb is not None:
+        owner = tb.tb_frame.f_locals.get("self")
+        if isinstance(owner, Component):
+            name = owner.name
+        tb = tb.tb_next
+    return f" in component '{name}'" if name else ""
+
+
+def _what(e: BaseException) -> str:
+    return str(e) if isinstance(e, SnakesimError) else f"{type(e).__name__}: {e}"
+
+
 def write_run(out_dir: Path, result: RunResult, config_text: str) -> None:
-    """signals.csv, summary.json, config.yaml (+ last_good_state.npz after a blow-up)."""
+    """signals.csv, summary.json, config.yaml (+ last_good_state.npz after a blow-up; a stale one from an
+    earlier run in the folder is removed, so it never sits beside a good summary)."""
     out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    result.log.write_csv(out_dir / "signals.csv")
-    (out_dir / "config.yaml").write_text(config_text)
-    if result.last_good_state is not None:
-        s = result.last_good_state
-        np.savez(out_dir / "last_good_state.npz", t=s["t"], X=s["X"], XD=s["XD"],
-                 **{f"x_{k.replace('/', '__')}": v for k, v in s["components"].items()})
-        result.summary["last_good_state_file"] = "last_good_state.npz"
-    (out_dir / "summary.json").write_text(json.dumps(result.summary, indent=2, default=float) + "\n")
+    try:
+        out_dir.mkdir(parents=True, exist_ok=True)
+        (out_dir / "config.yaml").write_text(config_text)      # first: small, and what reruns it
+        result.log.write_csv(out_dir / "signals.csv")
+        npz = out_dir / "last_good_state.npz"
+        if result.last_good_state is not None:
+            s = result.last_good_state
+            np.savez(npz, t=s["t"], X=s["X"], XD=s["XD"],
+                     **{f"x_{k.replace('/', '__')}": v for k, v in s["components"].items()})
+            result.summary["last_good_state_file"] = "last_good_state.npz"
+        elif npz.exists():
+            npz.unlink()
+        (out_dir / "summary.json").write_text(json.dumps(result.summary, indent=2, default=float) + "\n")
+    except OSError as e:
+        raise SnakesimError(f"could not write the run to {out_dir}: {e}") from None

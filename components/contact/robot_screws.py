@@ -93,7 +93,7 @@ def screw_layout(robot: RobotModel) -> ScrewLayout:
     if not screws:
         raise RobotScrewError(f"design '{robot.design or robot.label}' has no screws (metadata 'screws' is empty): "
                               "nothing for screw contact to sample; use a screw-propelled design, or run the "
-                              "design in a scene without screws: mini-eels-crawl, eels-lateral-undulation, "
+                              "design in a scene without screws: mini-eels-crawl, mini-eels-pipe-climb, eels-lateral-undulation, "
                               "eels-sidewinding (shape gaits on body_contact)")
     tree = robot.tree
     cols = {k: [] for k in ("parent_row", "screw_row", "mount_R", "mount_p", "radius", "length", "lead_angle",

@@ -25,6 +25,20 @@ force would exert a spurious spin torque. The samples decide where and how deep 
 contact is; the slip, ê_v and lever arm are the envelope's. Body-to-body contact and
 contact on non-screw links are ignored (as in the paper).
 
+Exact rings (``ring_contact="extremal"``, the default; issue 14). Samples alone let a ring sink up to
+r(1 − cos(π/per_ring)) into curved terrain (6.9 mm at r = 9 cm, 8 per ring) before any force acts. So each
+ring also queries the terrain at its centre c for the local normal n̂_c and meets it at its point
+extremal along −n̂_c, p* = c + r ê_c (ê_c = unit(−n̂_c + (n̂_c·â)â)): one contact of depth −φ(p*) with
+p*'s normal and material; a sphere's or a cylinder's exact SDF gives the ring's true deepest point, a
+first-order SDF (DEM) nearly. A sample still acts where it meets another surface than its ring's
+(its own ê_i more than min(2π/per_ring, π/2) from ê_c, or n̂_i ∥ â: a screw end), so a ring wedged
+between two walls keeps both; where n̂_c ∥ â the ring has no extremal point and its samples act as
+before. c and p* are fixed in the parent body for a given n̂_c, so the contact is still independent of
+the spin angle, and the depth's gradient is n̂ at p* (φ is stationary around the ring there): the
+Jacobians (jacobian_kernels.py) are unchanged. On a plane (numba) the samples are not even queried.
+Cost: one more Terrain.query call (the extremal points) for terrains other than a plane.
+``ring_contact="samples"`` is the former model, bit for bit.
+
 Broad phase (``broad_phase``): one bounding sphere per screw (centre c, radius
 sqrt(r² + (L/2)²) + margin) against ``terrain.distance_lower_bound``; only screws whose
 bound is ≤ 0 are sampled and queried, so a robot far from every surface costs one
@@ -42,8 +56,8 @@ in   link_poses[nl,7]       multibody link_poses (xyz + quaternion xyzw, world)
      joint_v[nj]            rad/s, multibody joint_v (screw spin rates)
      terrain                structured Terrain (terrain component)
 out  wrenches[nl,6]         N, N·m: to multibody.wrenches ([f, τ] world, about each link origin)
-     normal_force[1]        N, Σ F_n over all samples
-     contacts[1]            number of samples in contact
+     normal_force[1]        N, Σ F_n over all contacts
+     contacts[1]            number of contacts (rings' extremal points and samples)
      screw_normal_force[ns] N, Σ F_n per screw (metadata order)
      contact_set            ContactSet of the active contacts (computed once per step)
 all feedthrough from all inputs.
@@ -71,8 +85,9 @@ from .contact_set import ContactSet
 from .kernels import EV_FLOOR, MODES
 from .robot_screws import screw_layout
 from .screw_samples import ScrewContactSamples
-from .sdf_kernels import (Samples, SdfPorts, SdfWork, Surface, centres_step, plane_step, sample_step,
-                          seen_step, wrench_step)
+from .sdf_kernels import (Samples, SdfPorts, SdfWork, Surface, centres_step, plane_extremal_step, plane_step,
+                          ring_extremal_step, ring_finish_step, ring_sample_step, sample_step, seen_step,
+                          wrench_step)
 
 
 class ScrewSdfContactParams(Params):
@@ -84,6 +99,9 @@ class ScrewSdfContactParams(Params):
     v_eps: float = Field(1e-3, ge=0, description="m/s, slip regularisation width")
     regularisation: Literal["sqrt", "linear"] = "sqrt"
     ev_floor: float = Field(EV_FLOOR, gt=0, description="smallest admissible ‖e_v‖")
+    ring_contact: Literal["extremal", "samples"] = Field(
+        "extremal", description="'extremal': each ring meets the terrain at its deepest point along the local "
+        "normal (exact on curved terrain); 'samples': only where its samples do (sinks up to r(1 − cos(π/per_ring)))")
     broad_phase: bool = True
     margin: float = Field(0.0, ge=0, description="m added to each screw's bounding sphere")
 
@@ -124,17 +142,34 @@ class ScrewSdfContact(Component[ScrewSdfContactParams]):
         radial_B = np.ascontiguousarray(np.concatenate([s.radial for s in samples]))
         counts = np.array([len(s) for s in samples], dtype=np.int64)
         self.n_samples = int(counts.sum())
+        self.exact = p.ring_contact == "extremal"
+        start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+        n_rings = np.array([s.rings for s in samples], dtype=np.int64)
+        ring_start = np.concatenate([[0], np.cumsum(n_rings)]).astype(np.int64)
+        ring_first = np.concatenate([start[k] + s.per_ring * np.arange(s.rings) for k, s in enumerate(samples)])
+        self.n_rings = int(n_rings.sum())
+        #: rows of the per-contact arrays: the samples, then (exact rings) one per ring
+        self.n_rows = self.n_samples + (self.n_rings if self.exact else 0)
         self._axis_B = np.ascontiguousarray(lay.mount_R[:, :, 0])
         self._sphere_r = np.sqrt(lay.radius ** 2 + (0.5 * lay.length) ** 2) + p.margin
         self._samples = Samples(
             broad_phase=p.broad_phase, sphere_r=self._sphere_r,
-            start=np.concatenate([[0], np.cumsum(counts)]).astype(np.int64), points_B=points_B,
+            start=start, points_B=points_B,
             mount_p=lay.mount_p, ringc_B=np.ascontiguousarray(np.concatenate([s.points - s.radius * s.radial
                                                                               for s in samples])),
             radial_B=radial_B, axis_B=np.ascontiguousarray(lay.mount_R[:, :, 0]), parent_row=lay.parent_row,
             screw_row=lay.screw_row, radius=lay.radius, lead_angle=lay.lead_angle, hand=lay.hand,
             spin_dof=lay.spin_dof, spin_mult=lay.spin_mult, v_eps=p.v_eps, mode=MODES[p.regularisation],
-            ev_floor=p.ev_floor)
+            ev_floor=p.ev_floor, ring_start=ring_start, ring_first=ring_first.astype(np.int64),
+            cos_sep=float(np.cos(min(2.0 * np.pi / p.per_ring, 0.5 * np.pi))))
+
+    def stiffness_hint(self, u, readers):
+        """Penalty contact on the lightest screw, one point per ring at once (:mod:`.stiffness_hint`)."""
+        from .stiffness_hint import penalty_modes
+
+        lay = self.screws
+        return penalty_modes(self, u, [(int(lay.screw_row[s]), self.samples[s].rings) for s in range(lay.ns)],
+                             "ring contact(s)")
 
     def _material_table(self, terrain: Terrain) -> np.ndarray:
         """The kernels' material table ([K, C, MU, EV_A, EV_B] per terrain material, ``material`` applied;
@@ -199,11 +234,12 @@ class _Cache:
     and screws and samples sent to the narrow phase (tests and benches)."""
 
     __slots__ = ("comp", "terrain", "mats", "surface", "step", "step_scratch", "work", "ports", "scratch_ports", "seen",
-                 "centres_call", "sample_call", "counts", "active", "centres", "points", "distance", "normal",
+                 "centres_call", "sample_call", "extremal_call", "finish_call", "ext_points", "ext_distance",
+                 "ext_normal", "ext_material", "counts", "active", "centres", "points", "distance", "normal",
                  "material", "sample", "owner", "point", "vel", "force", "fn", "jac")
 
     def __init__(self, comp: ScrewSdfContact, u, y):
-        lay, n = comp.screws, comp.n_samples
+        lay, n, nr = comp.screws, comp.n_rows, comp.n_rings
         self.comp = comp
         self.jac = None                                            # port_jacobian's blocks, made on first use
         self.terrain = _UNSET                                      # not even None: output() checks it first
@@ -213,14 +249,18 @@ class _Cache:
         self.points, self.point, self.vel, self.force = (np.zeros((n, 3)) for _ in range(4))
         self.distance, self.normal, self.fn = np.zeros(n), np.zeros((n, 3)), np.zeros(n)
         self.material, self.sample, self.owner = (np.zeros(n, dtype=np.int64) for _ in range(3))
-        self.counts = np.zeros(5, dtype=np.int64)
+        self.counts = np.zeros(7, dtype=np.int64)      # [5] sample rows m (ring rows follow), [6] extremal points
+        self.ext_points, self.ext_normal = np.zeros((nr, 3)), np.zeros((nr, 3))
+        self.ext_distance, self.ext_material = np.zeros(nr), np.zeros(nr, dtype=np.int64)
         self.counts[3] = lay.ns
         self.work = SdfWork(active=self.active, centres=self.centres, points=self.points, distance=self.distance,
                             normal=self.normal, material=self.material, sample=self.sample, owner=self.owner,
                             R=np.zeros((3, 3)), point=self.point, vel=self.vel, force=self.force, fn=self.fn,
                             counts=self.counts, track="contact_set" in comp.used_outputs,
                             seen_poses=np.full((lay.nl, 7), np.nan), seen_vels=np.full((lay.nl, 6), np.nan),
-                            seen_joint_v=np.full(lay.nj, np.nan))
+                            seen_joint_v=np.full(lay.nj, np.nan), ring_row=np.zeros(n, dtype=np.int64),
+                            ring_dir=np.zeros((n, 3)), ext_points=self.ext_points, ext_row=np.zeros(nr, dtype=np.int64),
+                            ext_distance=self.ext_distance, ext_normal=self.ext_normal, ext_material=self.ext_material)
         ins = dict(poses=u.link_poses, vels=u.link_velocities, joint_v=u.joint_v)
         self.ports = SdfPorts(wrenches=y.wrenches, screw_fn=y.screw_normal_force, normal_force=y.normal_force,
                               contacts=y.contacts, **ins)
@@ -228,7 +268,9 @@ class _Cache:
                                       normal_force=np.zeros(1), contacts=np.zeros(1), **ins)
         self.seen = bind(seen_step, self.work, self.ports)
         self.centres_call = bind(centres_step, comp._samples, self.work, self.ports)
-        self.sample_call = bind(sample_step, comp._samples, self.work, self.ports)
+        self.sample_call = bind(ring_sample_step if comp.exact else sample_step, comp._samples, self.work, self.ports)
+        self.extremal_call = bind(ring_extremal_step, comp._samples, self.work, self.ports)
+        self.finish_call = bind(ring_finish_step, comp._samples, self.work, self.ports)
 
     @property
     def stats(self) -> dict:
@@ -248,8 +290,9 @@ class _Cache:
                                region_material=int(terrain.region_material[0]) if plane else 0, mats=mats)
         s = comp._samples
         if plane:       # the whole evaluation in one numba call
-            self.step = bind(plane_step, s, self.work, self.ports, self.surface)
-            self.step_scratch = bind(plane_step, s, self.work, self.scratch_ports, self.surface)
+            kernel = plane_extremal_step if comp.exact else plane_step
+            self.step = bind(kernel, s, self.work, self.ports, self.surface)
+            self.step_scratch = bind(kernel, s, self.work, self.scratch_ports, self.surface)
         else:
             self.step = functools.partial(self._evaluate, bind(wrench_step, s, self.work, self.ports, self.surface))
             self.step_scratch = functools.partial(self._evaluate, bind(wrench_step, s, self.work, self.scratch_ports,
@@ -271,4 +314,12 @@ class _Cache:
             self.distance[:m] = q.distance
             self.normal[:m] = q.normal
             self.material[:m] = q.material
+            if comp.exact:          # the rings' extremal points, queried in turn
+                ne = self.extremal_call()
+                if ne:
+                    q = terrain.query(self.ext_points[:ne])
+                    self.ext_distance[:ne] = q.distance
+                    self.ext_normal[:ne] = q.normal
+                    self.ext_material[:ne] = q.material
+                self.finish_call()
         wrench()

@@ -158,6 +158,118 @@ def plane_query(m, points, origin, n, out_distance, out_normal, out_material):
         out_material[i] = 0
 
 
+# -- exact ring contact (``ring_contact="extremal"``): each ring meets the terrain at its deepest point ----------
+#
+# Rows of the per-contact arrays: 0..m-1 the samples of the active screws (as before), m..m+nr-1 one row per
+# ring of those screws (its centre c, then its extremal point). The terrain is queried at c for the local
+# normal n̂_c; the ring's point extremal along −n̂_c is p* = c + r ê_c, ê_c = unit(−n̂_c + (n̂_c·â)â); the
+# terrain queried at p* gives the ring's contact (depth −φ(p*), normal, material). A sample keeps its own
+# contact only where it meets another surface than the ring's (its ê_i from its own normal more than
+# ``sep`` rad from ê_c, or along the axis: a screw end), so a ring in a channel's corner keeps both
+# contacts and no surface is counted twice. Where ê_c is ill-defined (n̂_c ∥ â) the ring has no row in
+# contact and its samples act as before.
+
+@njit(cache=True)
+def ring_rows(poses, active, n_active, start, points_B, ring_start, ring_first, ringc_B, parent_row, R, out_points,
+              out_sample, out_owner, out_ring_row):
+    """Sample rows (as sample_points) then one row per ring (its world centre; sample = the ring's first
+    sample, owner = the screw); out_ring_row[row] = the row of the sample's ring. Returns (m, nr)."""
+    m = 0
+    for a in range(n_active):
+        s = active[a]
+        m += start[s + 1] - start[s]
+    k = m
+    row = 0
+    for a in range(n_active):
+        s = active[a]
+        b = parent_row[s]
+        _rot(poses, b, R)
+        for g in range(ring_start[s], ring_start[s + 1]):
+            q = ring_first[g]
+            for j in range(3):
+                out_points[k, j] = poses[b, j] + R[j, 0] * ringc_B[q, 0] + R[j, 1] * ringc_B[q, 1] \
+                    + R[j, 2] * ringc_B[q, 2]
+            out_sample[k] = q
+            out_owner[k] = s
+            out_ring_row[k] = k
+            q_end = ring_first[g + 1] if g + 1 < ring_first.shape[0] else points_B.shape[0]
+            for i in range(q, q_end):
+                for j in range(3):
+                    out_points[row, j] = poses[b, j] + R[j, 0] * points_B[i, 0] + R[j, 1] * points_B[i, 1] \
+                        + R[j, 2] * points_B[i, 2]
+                out_sample[row] = i
+                out_owner[row] = s
+                out_ring_row[row] = k
+                row += 1
+            k += 1
+    return m, k - m
+
+
+@njit(cache=True)
+def ring_extremal(m, nr, points, distance, normal, owner, poses, axis_B, parent_row, radius, R, ring_dir,
+                  ext_points, ext_row):
+    """Per ring row k (centre queried: distance, normal): ê_c into ring_dir[k] (zeros where n̂_c ∥ â) and,
+    where the ring can reach the terrain (φ(c) < r), its extremal point p* = c + r ê_c into ext_points with
+    its row in ext_row. Every ring row is marked out of contact (+inf) until finish_extremal fills it.
+    Returns the number of extremal points to query."""
+    ne = 0
+    for k in range(m, m + nr):
+        s = owner[k]
+        b = parent_row[s]
+        _rot(poses, b, R)
+        ax = R[0, 0] * axis_B[s, 0] + R[0, 1] * axis_B[s, 1] + R[0, 2] * axis_B[s, 2]
+        ay = R[1, 0] * axis_B[s, 0] + R[1, 1] * axis_B[s, 1] + R[1, 2] * axis_B[s, 2]
+        az = R[2, 0] * axis_B[s, 0] + R[2, 1] * axis_B[s, 1] + R[2, 2] * axis_B[s, 2]
+        nx, ny, nz = normal[k, 0], normal[k, 1], normal[k, 2]
+        na = nx * ax + ny * ay + nz * az
+        ux, uy, uz = na * ax - nx, na * ay - ny, na * az - nz
+        un = math.sqrt(ux * ux + uy * uy + uz * uz)
+        r = radius[s]
+        if un > 1e-9:
+            ux, uy, uz = ux / un, uy / un, uz / un
+            ring_dir[k, 0], ring_dir[k, 1], ring_dir[k, 2] = ux, uy, uz
+            if distance[k] < r:
+                ext_points[ne, 0] = points[k, 0] + r * ux
+                ext_points[ne, 1] = points[k, 1] + r * uy
+                ext_points[ne, 2] = points[k, 2] + r * uz
+                ext_row[ne] = k
+                ne += 1
+        else:
+            ring_dir[k, 0], ring_dir[k, 1], ring_dir[k, 2] = 0.0, 0.0, 0.0
+        distance[k] = math.inf
+    return ne
+
+
+@njit(cache=True)
+def finish_extremal(m, ne, ext_row, ext_distance, ext_normal, ext_material, distance, normal, material, owner,
+                    ring_row, ring_dir, poses, axis_B, parent_row, cos_sep, R):
+    """The extremal points' queries into their ring rows; samples in contact with the surface their ring
+    already meets (ê_i within ``sep`` of ê_c) are taken out of contact (+inf)."""
+    for e in range(ne):
+        k = ext_row[e]
+        distance[k] = ext_distance[e]
+        normal[k, 0], normal[k, 1], normal[k, 2] = ext_normal[e, 0], ext_normal[e, 1], ext_normal[e, 2]
+        material[k] = ext_material[e]
+    for i in range(m):
+        if not distance[i] < 0.0:
+            continue
+        k = ring_row[i]
+        cx, cy, cz = ring_dir[k, 0], ring_dir[k, 1], ring_dir[k, 2]
+        if cx == 0.0 and cy == 0.0 and cz == 0.0:
+            continue                                    # the ring has no extremal point: samples act
+        s = owner[i]
+        _rot(poses, parent_row[s], R)
+        ax = R[0, 0] * axis_B[s, 0] + R[0, 1] * axis_B[s, 1] + R[0, 2] * axis_B[s, 2]
+        ay = R[1, 0] * axis_B[s, 0] + R[1, 1] * axis_B[s, 1] + R[1, 2] * axis_B[s, 2]
+        az = R[2, 0] * axis_B[s, 0] + R[2, 1] * axis_B[s, 1] + R[2, 2] * axis_B[s, 2]
+        nx, ny, nz = normal[i, 0], normal[i, 1], normal[i, 2]
+        na = nx * ax + ny * ay + nz * az
+        ux, uy, uz = na * ax - nx, na * ay - ny, na * az - nz
+        un = math.sqrt(ux * ux + uy * uy + uz * uz)
+        if un > 1e-9 and (ux * cx + uy * cy + uz * cz) > cos_sep * un:
+            distance[i] = math.inf                      # the ring's own contact covers this surface
+
+
 @njit(cache=True)
 def plane_active(centres, radii, origin, n, out_active):
     """Broad phase against a plane (exact distance, Lipschitz 1): screws whose sphere reaches it."""
@@ -198,6 +310,83 @@ def plane_contact_step(broad_phase, origin, n, region_material, sphere_r, start,
                                  spin_mult, mats, v_eps, mode, ev_floor, R, out_point, out_vel, out_force, out_fn,
                                  out_wrench, out_screw_fn)
     return n_active, m, n_contact
+
+
+@njit(cache=True)
+def plane_rings(poses, active, n_active, start, points_B, ring_start, ring_first, ringc_B, axis_B, parent_row, radius,
+                origin, n, R, out_points, out_distance, out_normal, out_sample, out_owner):
+    """Exact rings against a plane, without querying the samples: a plane's normal is the same
+    everywhere, so every sample of a ring meets the surface its extremal point does (finish_extremal
+    would drop them all) unless n̂ ∥ â, where the ring's samples act. Rows: the extremal point of each
+    ring that reaches the plane (φ(c) < r: depth r |n̂ − (n̂·â)â| − φ(c)), or the samples of a ring
+    whose axis is along n̂. Returns the number of rows."""
+    k = 0
+    for a in range(n_active):
+        s = active[a]
+        b = parent_row[s]
+        _rot(poses, b, R)
+        ax = R[0, 0] * axis_B[s, 0] + R[0, 1] * axis_B[s, 1] + R[0, 2] * axis_B[s, 2]
+        ay = R[1, 0] * axis_B[s, 0] + R[1, 1] * axis_B[s, 1] + R[1, 2] * axis_B[s, 2]
+        az = R[2, 0] * axis_B[s, 0] + R[2, 1] * axis_B[s, 1] + R[2, 2] * axis_B[s, 2]
+        na = n[0] * ax + n[1] * ay + n[2] * az
+        ux, uy, uz = na * ax - n[0], na * ay - n[1], na * az - n[2]
+        un = math.sqrt(ux * ux + uy * uy + uz * uz)
+        r = radius[s]
+        for g in range(ring_start[s], ring_start[s + 1]):
+            q = ring_first[g]
+            cx = poses[b, 0] + R[0, 0] * ringc_B[q, 0] + R[0, 1] * ringc_B[q, 1] + R[0, 2] * ringc_B[q, 2]
+            cy = poses[b, 1] + R[1, 0] * ringc_B[q, 0] + R[1, 1] * ringc_B[q, 1] + R[1, 2] * ringc_B[q, 2]
+            cz = poses[b, 2] + R[2, 0] * ringc_B[q, 0] + R[2, 1] * ringc_B[q, 1] + R[2, 2] * ringc_B[q, 2]
+            if un > 1e-9:
+                phi = (cx - origin[0]) * n[0] + (cy - origin[1]) * n[1] + (cz - origin[2]) * n[2]
+                if phi < r:
+                    px, py, pz = cx + r * ux / un, cy + r * uy / un, cz + r * uz / un
+                    out_points[k, 0], out_points[k, 1], out_points[k, 2] = px, py, pz
+                    out_distance[k] = (px - origin[0]) * n[0] + (py - origin[1]) * n[1] + (pz - origin[2]) * n[2]
+                    out_normal[k, 0], out_normal[k, 1], out_normal[k, 2] = n[0], n[1], n[2]
+                    out_sample[k] = q
+                    out_owner[k] = s
+                    k += 1
+            else:
+                q_end = ring_first[g + 1] if g + 1 < ring_first.shape[0] else points_B.shape[0]
+                for i in range(q, q_end):
+                    for j in range(3):
+                        out_points[k, j] = poses[b, j] + R[j, 0] * points_B[i, 0] + R[j, 1] * points_B[i, 1] \
+                            + R[j, 2] * points_B[i, 2]
+                    out_distance[k] = (out_points[k, 0] - origin[0]) * n[0] + (out_points[k, 1] - origin[1]) * n[1] \
+                        + (out_points[k, 2] - origin[2]) * n[2]
+                    out_normal[k, 0], out_normal[k, 1], out_normal[k, 2] = n[0], n[1], n[2]
+                    out_sample[k] = i
+                    out_owner[k] = s
+                    k += 1
+    return k
+
+
+@njit(cache=True)
+def plane_extremal_step(samples, work, ports, surface):
+    """plane_contact_step with exact rings (ring_contact="extremal"): broad phase, plane_rings, then
+    contact_wrenches, in one call."""
+    s, w, io, f = samples, work, ports, surface
+    ns = s.parent_row.shape[0]
+    if s.broad_phase:
+        screw_centres(io.poses, s.parent_row, s.mount_p, w.R, w.centres)
+        n_active = plane_active(w.centres, s.sphere_r, f.origin, f.n, w.active)
+    else:
+        for a in range(ns):
+            w.active[a] = a
+        n_active = ns
+    m = 0
+    if n_active:
+        m = plane_rings(io.poses, w.active, n_active, s.start, s.points_B, s.ring_start, s.ring_first, s.ringc_B,
+                        s.axis_B, s.parent_row, s.radius, f.origin, f.n, w.R, w.points, w.distance, w.normal,
+                        w.sample, w.owner)
+        for i in range(m):
+            w.material[i] = f.region_material
+    n_contact = contact_wrenches(m, w.distance, w.normal, w.material, w.sample, w.owner, io.poses, io.vels,
+                                 io.joint_v, s.ringc_B, s.radial_B, s.axis_B, s.parent_row, s.screw_row, s.radius,
+                                 s.lead_angle, s.hand, s.spin_dof, s.spin_mult, f.mats, s.v_eps, s.mode, s.ev_floor,
+                                 w.R, w.point, w.vel, w.force, w.fn, io.wrenches, io.screw_fn)
+    _finish(w, io, n_active, m, n_contact)
 
 
 @njit(cache=True)
@@ -271,10 +460,11 @@ def np_sum(a):
 
 Samples = record("Samples", ("broad_phase", "sphere_r", "start", "points_B", "mount_p", "ringc_B", "radial_B",
                              "axis_B", "parent_row", "screw_row", "radius", "lead_angle", "hand", "spin_dof",
-                             "spin_mult", "v_eps", "mode", "ev_floor"))
+                             "spin_mult", "v_eps", "mode", "ev_floor", "ring_start", "ring_first", "cos_sep"))
 SdfWork = record("SdfWork", ("active", "centres", "points", "distance", "normal", "material", "sample", "owner", "R",
                              "point", "vel", "force", "fn", "counts", "track", "seen_poses", "seen_vels",
-                             "seen_joint_v"))
+                             "seen_joint_v", "ring_row", "ring_dir", "ext_points", "ext_row", "ext_distance",
+                             "ext_normal", "ext_material"))
 SdfPorts = record("SdfPorts", ("poses", "vels", "joint_v", "wrenches", "screw_fn", "normal_force", "contacts"))
 Surface = record("Surface", ("origin", "n", "region_material", "mats"))
 
@@ -325,6 +515,43 @@ def sample_step(samples, work, ports):
                           work.R, work.points, work.sample, work.owner)
     work.counts[4] = m
     return m
+
+
+@njit(cache=True)
+def ring_sample_step(samples, work, ports):
+    """sample_step with exact rings: sample rows then ring-centre rows (ring_rows); sets counts[4] to all
+    rows and returns it (all are queried)."""
+    n_active = work.counts[3]
+    m, nr = 0, 0
+    if n_active:
+        m, nr = ring_rows(ports.poses, work.active, n_active, samples.start, samples.points_B, samples.ring_start,
+                          samples.ring_first, samples.ringc_B, samples.parent_row, work.R, work.points, work.sample,
+                          work.owner, work.ring_row)
+    work.counts[4] = m + nr
+    work.counts[5] = m
+    return m + nr
+
+
+@njit(cache=True)
+def ring_extremal_step(samples, work, ports):
+    """After the rows' query: the rings' extremal points into work.ext_points; returns how many (also
+    counts[6])."""
+    m = work.counts[5]
+    ne = ring_extremal(m, work.counts[4] - m, work.points, work.distance, work.normal, work.owner, ports.poses,
+                       samples.axis_B, samples.parent_row, samples.radius, work.R, work.ring_dir, work.ext_points,
+                       work.ext_row)
+    work.counts[6] = ne
+    return ne
+
+
+@njit(cache=True)
+def ring_finish_step(samples, work, ports):
+    """After the extremal points' query (work.ext_distance, ext_normal, ext_material; counts[6] of them):
+    the rings' rows."""
+    w = work
+    finish_extremal(w.counts[5], w.counts[6], w.ext_row, w.ext_distance, w.ext_normal, w.ext_material, w.distance, w.normal,
+                    w.material, w.owner, w.ring_row, w.ring_dir, ports.poses, samples.axis_B, samples.parent_row,
+                    samples.cos_sep, w.R)
 
 
 @njit(cache=True)

@@ -45,6 +45,8 @@ uses robot: RobotModel (the multibody's): joint names, kinds, continuity and eff
 
 from __future__ import annotations
 
+import math
+
 from typing import Literal
 
 import numpy as np
@@ -152,6 +154,26 @@ class JointPid(Component[JointPidParams]):
         self._gains = Gains(pos=self._pos, wrap=self._cont, kp=self._kp, ki=self._ki, kd=self._kd, tf=self._tf,
                             tmax=self._tmax, inv_tf=self._inv_tf, a=self._a, T=float(self._T),
                             discrete=self._discrete, clamp=self._clamp)
+
+    def stiffness_hint(self, u, readers):
+        """Each joint's loop on the apparent inertia of the multibody its tau drives: sqrt(kp/I) and kd/I
+        (position mode), kp/I (velocity mode), and the derivative filter's 1/tf."""
+        inertia = next((r.joint_inertia() for r in readers("tau") if hasattr(r, "joint_inertia")), None)
+        if inertia is None:
+            return []
+        out = []
+        for j, name in enumerate(self.robot.joints):
+            kp, kd, I = self._kp[j], self._kd[j], inertia[j]
+            if not I > 0:
+                continue
+            if self._pos[j]:
+                out.append((math.sqrt(kp / I), f"joint '{name}' kp = {kp:g} over inertia {I:.3g} (armature included)"))
+                out.append((kd / I, f"joint '{name}' kd = {kd:g} over inertia {I:.3g} (armature included)"))
+            elif self._vel[j]:
+                out.append((kp / I, f"joint '{name}' velocity kp = {kp:g} over inertia {I:.3g} (armature included)"))
+            if not self._discrete and self._inv_tf[j] > 0:
+                out.append((self._inv_tf[j], f"joint '{name}' derivative filter tf = {self._tf[j]:g} s"))
+        return out
 
     def continuous_state(self):
         if self._discrete:

@@ -73,7 +73,7 @@ class MobilityMonitor(Component[MobilityParams]):
     max_tilt = Output(shape=(), unit="rad")
     failed = Output(shape=(), unit="1")
     contact_made = Output(shape=(), unit="1")
-    t_contact = Output(shape=(), unit="s")
+    t_contact = Output(shape=(), unit="s", may_be_nan=True)
     hold_time = Output(shape=(), unit="s")
     max_hold_time = Output(shape=(), unit="s")
     climb = Output(shape=(), unit="m")

@@ -67,9 +67,10 @@ Munthe-Kaas stage correction the framework's multi-stage integrators (RK4,
 DOPRI5, ROS2) apply so they keep their order on SE(3) (see
 tests/multibody/test_conservation.py).
 
-Cost: Pinocchio 4.1 allocates O(nv³) derivative tensors in every Data: about
-2 GB and 3 s to build at 100 EELS-1.0 modules (nv = 306), negligible below
-30 modules. One Data per component.
+Cost: Pinocchio 4.1 allocates four nv³ second-order derivative tensors in every Data
+(model.new_data): 0.92 GB and ~3 s to build at 100 EELS-1.0 modules (nv = 306), 28 MB at
+30. One Data per component; ``snakesim check`` builds the unoptimised baselines (more
+Data) only with ``--baseline``.
 """
 
 from __future__ import annotations
@@ -201,6 +202,14 @@ class Multibody(Component[MultibodyParams]):
         self._selections = None
         self._x0 = joint_values.initial_state(robot, p, model)   # validated here, so errors name the component
 
+    def joint_inertia(self) -> np.ndarray:
+        """Apparent inertia of each DOF joint (robot.joints order) at the initial state, 1 / (M⁻¹)_ii with
+        the armature in M: what a joint's PID gains act on (kg·m², or kg for a prismatic joint)."""
+        pin = self._pin
+        m = pin.crba(self.dyn.model, self.dyn.data, self._x0[:self._nq])
+        m = np.triu(m) + np.triu(m, 1).T
+        return 1.0 / np.diag(np.linalg.inv(m))[self._dof_v]
+
     def continuous_state(self):
         return ContinuousState(self._x0.copy(), ndx=2 * self._nv,
                                second_order=self._nv,
@@ -285,10 +294,12 @@ class Multibody(Component[MultibodyParams]):
         y.energy[0] += 0.5 * float(self._arm_v @ c.vv)
 
     # -- introspection ------------------------------------------------------------------------
-    def build_report(self):
-        """``snakesim check`` shows the multibody optimisation with its timing, and each joint's armature
-        with where it came from (the URDF has none: the design or the scene adds it)."""
-        rep = self.optimisation_report(timing=True)
+    def build_report(self, baseline: bool = False):
+        """``snakesim check`` shows the multibody optimisation (with ``--baseline`` also its timing against
+        the unoptimised baselines, built only then: at 100 modules each holds ~1 GB of Pinocchio Data),
+        and each joint's armature with where it came from (the URDF has none: the design or the scene
+        adds it)."""
+        rep = self.optimisation_report(timing=baseline)
         rep["armature"] = {j: {"kg_m2": v, "source": src}
                            for j, (v, src) in joint_values.armature_sources(self.robot, self.p).items()}
         return rep
@@ -320,7 +331,7 @@ class _Cache:
     """One run's multibody scratch and bound kernels (see Multibody.make_cache).
 
     The Pinocchio Data is the component's: a workspace every solve overwrites whole, one per
-    component because Pinocchio 4.1's Data holds O(nv³) derivative tensors (2 GB at 100 modules)."""
+    component because Pinocchio 4.1's Data holds nv³ derivative tensors (0.92 GB at 100 modules)."""
 
     __slots__ = ("x", "q", "v", "a", "qdd", "g", "vv", "fresh", "model", "want_acc", "kin", "ports", "state", "force",
                  "solve", "accelerations", "momentum", "energy", "ensure_kinematics", "lin_scratch", "frames", "lin_tau")

@@ -27,7 +27,7 @@ import time
 import numpy as np
 import pinocchio as pin
 
-from .model import Dynamics, build_dynamics, build_pin_model
+from .model import Dynamics, build_dynamics, build_pin_model, new_data
 
 
 def time_call(fn, budget_s: float = 0.05, batches: int = 5) -> float:
@@ -46,16 +46,20 @@ def time_call(fn, budget_s: float = 0.05, batches: int = 5) -> float:
     return best * 1e6
 
 
-def baseline_models(tree, armature: dict[str, float]) -> dict[str, Dynamics]:
-    """The unoptimised models: {'aba': ..., 'crba': ...} (see the module docstring)."""
-    out = {}
-    m = build_pin_model(tree, mimic=True, fixed="locked")
-    _set_armature(m, armature, 1.0)
-    out["crba"] = Dynamics("mimic_crba", m, m.createData(), [])
+def baseline_model(tree, armature: dict[str, float], path: str) -> Dynamics:
+    """The unoptimised model of ``path`` 'crba' or 'aba' (see the module docstring)."""
+    if path == "crba":
+        m = build_pin_model(tree, mimic=True, fixed="locked")
+        _set_armature(m, armature, 1.0)
+        return Dynamics("mimic_crba", m, new_data(m), [])
     m = build_pin_model(tree, mimic=False, fixed="free")
     _set_armature(m, armature, 1.0)
-    out["aba"] = Dynamics("plain", m, m.createData(), [])
-    return out
+    return Dynamics("plain", m, new_data(m), [])
+
+
+def baseline_models(tree, armature: dict[str, float]) -> dict[str, Dynamics]:
+    """The unoptimised models: {'aba': ..., 'crba': ...} (both at once: each holds an O(nv³) Data)."""
+    return {path: baseline_model(tree, armature, path) for path in ("crba", "aba")}
 
 
 def _set_armature(model, armature, other):
@@ -113,6 +117,8 @@ class OptimisationReport(dict):
             for path, c in cost.items():
                 lines.append(f"    {path:8s} {c['optimised']:9.1f} / {c['unoptimised']:9.1f}   "
                              f"x{c['unoptimised'] / c['optimised']:.2f}   ({c['unoptimised_dof']} DOF unoptimised)")
+        else:
+            lines.append("  cost against the unoptimised baselines: snakesim check --baseline")
         lines.append(f"  baseline: {self['baseline']}")
         if self.get("armature"):
             from .joint_values import armature_lines
@@ -139,20 +145,28 @@ def optimisation_report(layout, dyn: Dynamics, mode: str, why: str | None, armat
                                  "spin_inertia": g.spin_inertia} for g in layout.groups]},
         baseline=BASELINE_TEXT, timed=False)
     if timing:
-        base = baseline_models(tree, armature)
+        # one extra model at a time, each dropped once timed: each holds a Data of O(nv³) bytes
+        # (model.new_data), so at 100 modules holding the three together peaked at several GB
         cost = {}
-        crba_opt = dyn if mode == "mimic_crba" else build_dynamics(tree, "mimic_crba", armature,
-                                                                   layout.groups)
-        if mode == "plain":
-            crba_opt = Dynamics("mimic_crba", dyn.model, dyn.model.createData(), [])
         if mode != "mimic_crba":
+            base = baseline_model(tree, armature, "aba")
             cost["aba"] = {"optimised": time_dynamics(dyn, budget_s=budget_s),
-                           "unoptimised": time_dynamics(base["aba"], budget_s=budget_s),
-                           "optimised_dof": dyn.model.nv, "unoptimised_dof": base["aba"].model.nv}
-        cost["crba"] = {"optimised": time_dynamics(crba_opt, budget_s=budget_s),
-                        "unoptimised": time_dynamics(base["crba"], budget_s=budget_s),
-                        "optimised_dof": crba_opt.model.nv, "unoptimised_dof": base["crba"].model.nv}
-        rep["cost_us"] = cost
+                           "unoptimised": time_dynamics(base, budget_s=budget_s),
+                           "optimised_dof": dyn.model.nv, "unoptimised_dof": base.model.nv}
+            del base
+        if mode == "mimic_crba":
+            crba_opt = dyn
+        elif mode == "plain":           # the same model: its own Data's CRBA path
+            crba_opt = Dynamics("mimic_crba", dyn.model, dyn.data, [])
+        else:
+            crba_opt = build_dynamics(tree, "mimic_crba", armature, layout.groups)
+        opt_us, opt_nv = time_dynamics(crba_opt, budget_s=budget_s), crba_opt.model.nv
+        del crba_opt
+        base = baseline_model(tree, armature, "crba")
+        cost["crba"] = {"optimised": opt_us, "unoptimised": time_dynamics(base, budget_s=budget_s),
+                        "optimised_dof": opt_nv, "unoptimised_dof": base.model.nv}
+        del base
+        rep["cost_us"] = {k: cost[k] for k in ("aba", "crba") if k in cost}
         rep["timed"] = True
     return rep
 

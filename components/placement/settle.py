@@ -77,7 +77,7 @@ out  wrenches[nl, 6]    N, N·m attraction + drag, world axes about link origins
      phase[1]           SettlePhase: 0 SETTLING, 1 LOADING, 2 HOLDING
      settle_time[1]     s, time of the latch (NaN before)
      hold_time[1]       s, time gravity came on (NaN before)
-     gap[ns]            m, each screw's nearest-sample signed distance to the terrain
+     gap[ns]            m, each screw's nearest signed distance to the terrain (nearest sample, or its ring's extremal point)
      max_speed[1]       m/s, fastest link origin
      attraction         AttractionSet: points (n, 3) m, forces (n, 3) N, world; the springs now (n = 0 latched)
 """
@@ -165,8 +165,8 @@ class Settle(Component[SettleParams]):
                       names=lambda c: c.robot.joints)
     tau_ff = Output(shape=lambda c: (c.robot.nj,), unit="N*m", feedthrough=(), names=lambda c: c.robot.joints)
     phase = Output(shape=(1,), unit="1", feedthrough=())
-    settle_time = Output(shape=(1,), unit="s", feedthrough=())
-    hold_time = Output(shape=(1,), unit="s", feedthrough=())
+    settle_time = Output(shape=(1,), unit="s", feedthrough=(), may_be_nan=True)
+    hold_time = Output(shape=(1,), unit="s", feedthrough=(), may_be_nan=True)
     gap = Output(shape=lambda c: (c.screws.ns,), unit="m", feedthrough=("link_poses", "terrain"),
                  names=lambda c: c.screws.names)
     max_speed = Output(shape=(1,), unit="m/s", feedthrough=("link_velocities",))
@@ -224,7 +224,24 @@ class Settle(Component[SettleParams]):
         # argmin of φ within each screw's block of samples
         order = np.lexsort((q.distance, self._screw_of))
         first = order[self._start]
-        return q.distance[first], q.normal[first], pts[first], self._row[first]
+        phi, n, p = q.distance[first], q.normal[first], pts[first]
+        # the nearest sample's ring meets the terrain at its point extremal along −n̂ (as screw_sdf_contact's
+        # exact rings do): on curved terrain the sample lies up to r (1 − cos(π/per_ring)) farther out, a
+        # gap the contact never closes. Where that point is nearer, it is the screw's nearest point.
+        Rf = R[first]
+        c = np.einsum("nij,nj->ni", Rf, self._centre_B[first]) + poses[self._row[first], :3]
+        a = np.einsum("nij,nj->ni", Rf, self._axis_B[first])
+        e = -n + np.einsum("ni,ni->n", n, a)[:, None] * a
+        en = np.linalg.norm(e, axis=1)
+        ok = en > 1e-9
+        if ok.any():
+            ext = c[ok] + self._radius[first][ok, None] * e[ok] / en[ok, None]
+            qe = terrain.query(ext)
+            nearer = np.flatnonzero(ok)[qe.distance < phi[ok]]
+            keep = qe.distance < phi[ok]
+            phi, n, p = phi.copy(), n.copy(), p.copy()
+            phi[nearer], n[nearer], p[nearer] = qe.distance[keep], qe.normal[keep], ext[keep]
+        return phi, n, p, self._row[first]
 
     def _speed(self, vel):
         return float(np.sqrt((vel[:, :3] ** 2).sum(axis=1)).max())

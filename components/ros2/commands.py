@@ -128,7 +128,7 @@ class Ros2Commands(Component[Ros2CommandsParams]):
     q = Input(shape=_nj, unit="rad", default=np.nan, role=JOINT_POSITIONS)
     setpoint = Output(shape=_nj, unit=None, feedthrough=("q",), names=_joints)
     rate = Output(shape=_nj, unit="rad/s", feedthrough=("q",), names=_joints)
-    gravity = Output(shape=(1,), unit=None, feedthrough=())
+    gravity = Output(shape=(1,), unit=None, feedthrough=(), may_be_nan=True)
     rejected = Output(shape=(1,), unit="1", feedthrough=())
     applied = Output(shape=(1,), unit="1", feedthrough=())
 

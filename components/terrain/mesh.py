@@ -25,6 +25,7 @@ import numba
 import numpy as np
 
 from snakesim.framework import ConfigError
+from snakesim.framework.limits import fmt_bytes, memory_limit_bytes
 
 from . import store as _store
 from .base import Bounds, Terrain
@@ -53,6 +54,27 @@ def compute_sdf_grid(vertices: np.ndarray, faces: np.ndarray, lo: np.ndarray, h:
                                 np.ascontiguousarray(faces, dtype=np.int64),
                                 sign_type=igl.SIGNED_DISTANCE_TYPE_PSEUDONORMAL)[0]
     return np.asarray(s, dtype=np.float64).reshape(shape)
+
+
+#: bytes one grid node takes while the grid is computed: the query points (24), their meshgrid (24), the
+#: distances (8) and the signed-distance library's per-point scratch (~24)
+SDF_BYTES_PER_NODE = 80
+
+
+def _check_grid_size(path, h: float, shape: tuple, ext: np.ndarray) -> None:
+    """Refuse a grid whose computation needs more than the memory limit, naming the resolution that fits."""
+    nodes = float(np.prod(np.asarray(shape, dtype=float)))
+    need, limit = SDF_BYTES_PER_NODE * nodes, memory_limit_bytes()
+    if need > limit:
+        h_fit = float(np.cbrt(np.prod(ext) * SDF_BYTES_PER_NODE / limit))
+        while SDF_BYTES_PER_NODE * np.prod([np.ceil(e / h_fit) + 1 for e in ext]) > limit:   # the +1 nodes
+            h_fit *= 1.02
+        h_fit = float(f"{h_fit * 1.005:.3g}")
+        raise ConfigError(f"an SDF grid at resolution {h:g} m over the mesh's {ext[0]:.3g} x {ext[1]:.3g} x "
+                          f"{ext[2]:.3g} m box is {shape[0]} x {shape[1]} x {shape[2]} = {nodes:.3g} nodes and needs "
+                          f"about {fmt_bytes(need)} to build; the limit is {fmt_bytes(limit)} (half the physical "
+                          f"memory, or SNAKESIM_MEMORY_LIMIT): use a resolution of at least {h_fit:.3g} m (or fewer "
+                          "cells)", str(path), "resolution")
 
 
 def load_mesh(path: str | Path):
@@ -161,6 +183,7 @@ def mesh_terrain(path: str | Path, cells: int = 128, resolution: float | None = 
     if not h > 0:
         raise ConfigError(f"grid resolution must be > 0 m, got {h}", str(path), "resolution")
     shape = tuple(int(np.ceil(e / h)) + 1 for e in ext)
+    _check_grid_size(path, h, shape, ext)
     params = {"v": SDF_VERSION, "lo": lo.round(12).tolist(), "h": h, "shape": shape,
               "open": bool(open_surface)}
     key = _store.content_key(path.read_bytes(), params)

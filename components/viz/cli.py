@@ -26,9 +26,16 @@ class TargetType(click.ParamType):
         if isinstance(value, VizTarget):
             return value
         try:
-            return parse_target(value)
+            target = parse_target(value)
         except VizTargetError as e:
             self.fail(str(e), param, ctx)
+        if target.mode == "save":     # checked before the run: a long run never ends unable to save
+            from snakesim.framework.run_files import check_writable_file
+            try:
+                check_writable_file(target.path, "--viz save")
+            except SnakesimError as e:
+                self.fail(str(e), param, ctx)
+        return target
 
 
 class TargetOption(click.Option):

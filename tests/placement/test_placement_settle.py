@@ -118,7 +118,7 @@ def test_eels15_settles_with_every_screw_within_1mm(scene, duration):
     assert r[P + "settle.settle_time"][-1, 0] == pytest.approx(T[latched[0]], abs=2e-3)
 
 
-@pytest.mark.parametrize("scene, duration, need", [("placement-u-channel", 0.6, 4), ("placement-dem", 3.5, 6)])
+@pytest.mark.parametrize("scene, duration, need", [("placement-u-channel", 0.6, 4), ("placement-dem", 4.5, 6)])
 def test_settles_in_u_channel_and_on_dem(scene, duration, need):
     # DEM: EELS 1.0's two screws per module are one rigid body, so the scene asks 6 of 8 in the band
     r = load_session(scene, sim_overrides={"duration": duration}).run()

@@ -103,3 +103,18 @@ def test_shipped_box_channel_is_the_generator_output_and_loads():
     # in the middle of the channel floor, 0.1 m up: 0.1 from the floor, 0.2 from each wall
     assert t.distance([[1.5, 0.0, 0.1]])[0] == pytest.approx(0.1, abs=t.h)
     assert t.distance([[1.5, 0.15, 0.3]])[0] == pytest.approx(0.05, abs=t.h)
+
+
+def test_a_grid_too_large_for_memory_is_refused_before_computing(box_file, tmp_path, monkeypatch):
+    """Issue 17: a resolution needing hundreds of GB is refused, naming the limit and a resolution that fits."""
+    before = mesh_mod.compute_count
+    with pytest.raises(ConfigError) as e:
+        mesh_terrain(box_file, resolution=1e-4, store=tmp_path / "s")
+    msg = str(e.value)
+    assert str(box_file) in msg and "resolution" in msg and "resolution 0.0001 m" in msg and "GB" in msg
+    assert mesh_mod.compute_count == before               # nothing was computed
+    monkeypatch.setenv("SNAKESIM_MEMORY_LIMIT", "1e6")
+    with pytest.raises(ConfigError) as e:
+        mesh_terrain(box_file, resolution=0.02, store=tmp_path / "s")
+    h_fit = float(str(e.value).split("at least ")[1].split(" m")[0])
+    mesh_terrain(box_file, resolution=h_fit, store=tmp_path / "s")    # the suggestion fits
