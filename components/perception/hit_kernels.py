@@ -1,5 +1,6 @@
-"""The per-ray loops of the perception sensors, compiled (numba): what Embree returns turned
-into hits, and hits into pixels, without a Python or NumPy pass per quantity.
+"""The per-ray loops of the perception sensors, compiled (numba; every ray is independent, so
+the loops split over the cores): what Embree returns turned into hits, and hits into pixels,
+without a Python or NumPy pass per quantity.
 
     rays_to_world   sensor-frame rays to the world (float64), and Embree's float32 copies
                     starting at min_range
@@ -15,15 +16,15 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 MISS = -1
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, parallel=True)
 def rays_to_world(o_l, d_l, R, p, min_range, o_w, d_w, start32, d32):
     """o_w = p + R·o_l, d_w = R·d_l per ray; start32 = o_w + min_range·d_w and d32 in float32."""
-    for i in range(o_l.shape[0]):
+    for i in prange(o_l.shape[0]):
         for a in range(3):
             o = p[a] + R[a, 0] * o_l[i, 0] + R[a, 1] * o_l[i, 1] + R[a, 2] * o_l[i, 2]
             d = R[a, 0] * d_l[i, 0] + R[a, 1] * d_l[i, 1] + R[a, 2] * d_l[i, 2]
@@ -32,7 +33,7 @@ def rays_to_world(o_l, d_l, R, p, min_range, o_w, d_w, start32, d32):
             d32[i, a] = d
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, parallel=True)
 def nearest_hits(d, min_range, max_range,
                  geom_a, t_a, prim_a, ng_a, robot_in_a,
                  geom_b, t_b, prim_b, ng_b,
@@ -44,7 +45,7 @@ def nearest_hits(d, min_range, max_range,
     rays' start plus min_range; hits beyond max_range are misses (inf)."""
     n = d.shape[0]
     has_a, has_b = geom_a.shape[0] == n, geom_b.shape[0] == n
-    for i in range(n):
+    for i in prange(n):
         best = math.inf
         src = 0             # 0 none, 1 terrain (A), 2 robot in A, 3 robot in B
         if has_a and geom_a[i] != MISS:
@@ -85,12 +86,12 @@ def nearest_hits(d, min_range, max_range,
         normal[i, 0], normal[i, 1], normal[i, 2] = nx * s, ny * s, nz * s
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, parallel=True)
 def develop(pixel, o_z, d_z, d_w, distance, normal, reflect, headlamp, to_sun, intensity, ambient,
             reference_range, shadowed, image, depth, rng):
     """Write each hit ray's pixel: image[p, :] = reflect·(ambient + E·cos θ) (E·(r_ref/r)² for a
     headlamp, l = −ray; a sun's l = to_sun, 0 where shadowed), range r, depth o_z + r·d_z."""
-    for k in range(pixel.shape[0]):
+    for k in prange(pixel.shape[0]):
         r = distance[k]
         if not math.isfinite(r):
             continue
