@@ -434,7 +434,7 @@ def test_obstacle_course_loads_by_name():
     names = {r: t.materials[t.region_material[i]] for i, r in enumerate(t.regions)}
     assert (names["ground"].name, names["ground"].k, names["ground"].c, names["ground"].mu) == ("ice", 1e5, 1e3, 0.1)
     for r in ("blocks", "rocks"):
-        assert (names[r].name, names[r].k, names[r].c, names[r].mu) == ("rock", 1e6, 2e3, 0.6)
+        assert (names[r].name, names[r].k, names[r].c, names[r].mu) == ("rock", 1e6, 500.0, 0.6)
     # spread over x in [1, 8], y in [-2, 2]; rocks are boulders (centres below the ice)
     for x, y, r in _discs(t):
         assert 1 <= x <= 8 and -2 <= y - r and y + r <= 2
