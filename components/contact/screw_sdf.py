@@ -39,6 +39,10 @@ Jacobians (jacobian_kernels.py) are unchanged. On a plane (numba) the samples ar
 Cost: one more Terrain.query call (the extremal points) for terrains other than a plane.
 ``ring_contact="samples"`` is the former model, bit for bit.
 
+Watch (``max_depth``): a contact deeper than max_depth ends the run naming the screw link
+and the depth (a bounce from a step too large for k, or a material too soft), never
+believable garbage.
+
 Broad phase (``broad_phase``): one bounding sphere per screw (centre c, radius
 sqrt(r² + (L/2)²) + margin) against ``terrain.distance_lower_bound``; only screws whose
 bound is ≤ 0 are sampled and queried, so a robot far from every surface costs one
@@ -91,6 +95,10 @@ from .sdf_kernels import (Samples, SdfPorts, SdfWork, Surface, centres_step, pla
 
 
 class ScrewSdfContactParams(Params):
+    max_depth: float | None = Field(0.03, gt=0, description="m; a contact deeper in the terrain stops the run (a "
+                                                            "step too large for k, or a material too soft: the "
+                                                            "weight sinks a screw by F/k, about a millimetre); "
+                                                            "None: no watch")
     rings: int = Field(3, ge=1, description="rings of samples per screw, spread over its length")
     per_ring: int = Field(8, ge=1, description="samples per ring, evenly around the envelope")
     phase: float = Field(0.0, description="rad, rotates every ring about its axis (φ = 3π/2 is the joint frame's −z)")
@@ -189,6 +197,13 @@ class ScrewSdfContact(Component[ScrewSdfContactParams]):
         if u.terrain is not c.terrain:
             c.use_terrain(self, u.terrain)
         c.step()
+        m = int(c.counts[4])
+        if m and self.p.max_depth is not None and -c.distance[:m].min() > self.p.max_depth:
+            k = int(c.distance[:m].argmin())
+            link = self.robot.links[self.screws.screw_row[c.owner[k]]]
+            self.stop(f"contact on screw link '{link}' is {-c.distance[k] * 1e3:.3g} mm deep at t = {t:.6g} s, "
+                      f"beyond max_depth = {self.p.max_depth * 1e3:g} mm: the step is too large for the contact "
+                      f"stiffness (see the run's step_check) or the material too soft")
 
     def port_jacobian(self, port, t, x, u, y):
         """∂wrenches/∂(screw link twist, displacement): per screw link 6×6 blocks from the last

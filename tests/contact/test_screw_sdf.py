@@ -173,3 +173,16 @@ def test_the_contact_set_describes_its_inputs_even_when_output_ran_at_others():
     h.inputs.terrain = load_terrain(soft)
     h.c.calc_contact_set(0.0, None, h.u, h.y)
     np.testing.assert_allclose(h.y.contact_set.normal_force, 0.5 * ref_b.normal_force, rtol=0.05)
+
+
+def test_a_contact_deeper_than_max_depth_stops_the_run_naming_the_screw():
+    """Screws 4 cm into the ice (a bounce from a step too large for k) end the run with a reason, where
+    2 cm under max_depth = 3 cm does not."""
+    for depth, stops in ((0.02, False), (0.04, True)):
+        mb = Harness(Multibody, dict(ROBOT, base_position=(0.0, 0.0, 0.09 - depth)))
+        h = contact()
+        feed(h, mb.outputs())
+        reason = h.c._stop.reason
+        assert (reason is not None) == stops, reason
+        if stops:
+            assert "screw link 'screw_" in reason and "40 mm deep" in reason and "max_depth = 30 mm" in reason
