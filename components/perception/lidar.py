@@ -43,7 +43,7 @@ from snakesim.framework import Component, Input, Output, Params, Uses
 from .beam_patterns import PRESETS, BeamFile, BeamGrid, BeamPattern, BeamRosette
 from .mount import SensorMount, mount_on, quaternion_xyzw
 from .ray_caster import SensorWorld
-from .reflectance import cos_incidence, lidar_intensity
+from .reflectance import lidar_intensity
 
 RETURN, NO_RETURN, TOO_CLOSE, DROPOUT = 0, 1, 2, 3
 STATUS_NAMES = ("return", "no_return", "too_close", "dropout")
@@ -151,9 +151,11 @@ class Lidar(Component[LidarParams]):
         status[np.isfinite(r)] = RETURN
         status[r < self.min_range] = TOO_CLOSE
         ret = status == RETURN
-        intensity = np.zeros(len(r))
-        intensity[ret] = lidar_intensity(hits.albedo[ret], cos_incidence(hits.normal[ret], -d_w[ret]), r[ret],
-                                         p.reference_range, p.intensity == "reflectivity")
+        # every beam at once, then the misses zeroed (their normals and albedos are unset)
+        with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
+            cos = np.maximum(-np.einsum("ij,ij->i", hits.normal, d_w), 0.0)
+            intensity = np.where(ret, lidar_intensity(hits.albedo, cos, r, p.reference_range,
+                                                      p.intensity == "reflectivity"), 0.0)
         measured = np.where(ret, r, np.nan)
         if p.range_noise > 0 or p.dropout > 0:
             gen = np.random.Generator(np.random.Philox(key=int(p.seed), counter=[seq, 0, 0, 0]))

@@ -17,11 +17,6 @@ from __future__ import annotations
 import numpy as np
 
 
-def cos_incidence(normal: np.ndarray, to_light: np.ndarray) -> np.ndarray:
-    """max(n·l, 0) per row of unit normals and unit directions to the light (n, 3)."""
-    return np.maximum(np.einsum("ij,ij->i", normal, to_light), 0.0)
-
-
 def lidar_intensity(albedo, cos_theta, r, reference_range: float, compensated: bool) -> np.ndarray:
     """Diffuse return of each beam: ρ·cos θ, times (r_ref / r)² unless range-compensated."""
     i = albedo * cos_theta
