@@ -18,6 +18,8 @@ uses robot: RobotModel (optional): the link meshes (its URDF visuals)
 
 from __future__ import annotations
 
+from typing import Literal
+
 from pydantic import Field
 
 from snakesim.components.multibody.robot_model import RobotModel
@@ -42,6 +44,10 @@ class SensorSceneParams(Params):
                                            "the moulin)")
     refine_limit: float = Field(0.5, gt=0, description="m, largest refinement step accepted")
     robot_visible: bool = Field(True, description="the robot's own bodies occlude and return (self-occlusion)")
+    robot_geometry: Literal["visual", "collision"] = Field(
+        "visual", description="what sensors see of the robot: its URDF visuals (screw blades: ~23k faces on "
+                              "EELS 1.0) or its collision shapes (screw envelopes: ~3k faces, a cheaper scene "
+                              "build per instant)")
     robot_albedo: float | None = Field(None, ge=0, le=1, description="albedo of every link (None: the "
                                                                       "mean of each visual's URDF colour)")
 
@@ -59,7 +65,7 @@ class SensorScene(Component[SensorSceneParams]):
         self.nl = self.robot.nl if self.robot is not None else 0
         self._surfaces = None
         if self.robot is not None and self.p.robot_visible:
-            self._surfaces = robot_surfaces(self.robot, self.p.robot_albedo)
+            self._surfaces = robot_surfaces(self.robot, self.p.robot_albedo, self.p.robot_geometry)
 
     def make_cache(self, x, u, y):
         return _TerrainCache()

@@ -113,11 +113,17 @@ def is_exact(terrain: Terrain) -> bool:
     return not isinstance(terrain, (HeightField, SdfGrid))
 
 
-def robot_surfaces(robot: RobotModel, albedo: float | None = None) -> RobotSurfaces:
-    """Pack ``robot``'s link visual meshes (``robot.derived(link_meshes)``, shared with the viewer)."""
-    from snakesim.components.viz.robot_geometry import link_meshes
+def robot_surfaces(robot: RobotModel, albedo: float | None = None, geometry: str = "visual") -> RobotSurfaces:
+    """Pack ``robot``'s link meshes: ``visual`` (the URDF visuals, shared with the viewer:
+    ``robot.derived(link_meshes)``) or ``collision`` (the contact shapes: a screw's envelope
+    cylinder instead of its 1000-triangle blades; each link coloured as its first visual)."""
+    from snakesim.components.viz.robot_geometry import link_collision_meshes, link_meshes
 
     meshes = robot.derived(link_meshes)
+    if geometry == "collision":
+        colour = {m.link: m.colors[0] for m in meshes}
+        meshes = [dataclasses.replace(m, colors=np.tile(colour[m.link], (len(m.vertices), 1)))
+                  if m.link in colour else m for m in robot.derived(link_collision_meshes)]
     if not meshes:
         z = np.zeros((0, 3))
         return RobotSurfaces(z, np.zeros(0, np.int64), np.zeros((0, 3), np.int32), np.zeros(0, np.int64),

@@ -54,13 +54,23 @@ def link_meshes(robot: RobotModel) -> list[LinkMesh]:
     return meshes_from_urdf(robot.urdf, Path(base), robot.screw_meshes)
 
 
-def meshes_from_urdf(text: str, base_dir: Path, screws: dict | None = None) -> list[LinkMesh]:
+def link_collision_meshes(robot: RobotModel) -> list[LinkMesh]:
+    """One :class:`LinkMesh` per link with ``<collision>`` elements: the contact shapes (a screw's
+    envelope cylinder instead of its bladed visual mesh), default colour. ``robot.derived`` it."""
+    from snakesim.robots.description import URDF_DIR
+
+    base = robot.base_dir if robot.base_dir is not None else URDF_DIR
+    return meshes_from_urdf(robot.urdf, Path(base), robot.screw_meshes, element="collision")
+
+
+def meshes_from_urdf(text: str, base_dir: Path, screws: dict | None = None, element: str = "visual") -> list[LinkMesh]:
+    """Each link's ``element`` ("visual" or "collision") geometry as one mesh, link frame."""
     root = ET.fromstring(text)
     named = {m.get("name"): _rgba(m) for m in root.findall("material")}
     out = []
     for link in root.findall("link"):
         parts = []
-        for vis in link.findall("visual"):
+        for vis in link.findall(element):
             mesh = _geometry(vis.find("geometry"), base_dir, screws or {}, link.get("name"))
             if mesh is None:
                 continue

@@ -88,7 +88,8 @@ def test_intensity_is_diffuse_reflectance(mode):
     assert np.all(s.intensity[~ret] == 0)
 
 
-def test_self_occlusion_by_the_head():
+@pytest.mark.parametrize("geometry", ["visual", "collision"])
+def test_self_occlusion_by_the_head(geometry):
     poses = initial_link_poses()
     head = poses[ROBOT.link_index("head")]
     ground = terrain({"kind": "plane", "origin": (0.0, 0.0, -1.0)})
@@ -96,7 +97,7 @@ def test_self_occlusion_by_the_head():
             "horizontal_fov": 1.0}
     # 0.2 m above the head's top, over its middle (head: a cylinder r 0.0675 along x from 0 to 0.25 m)
     mount = {"link": "head", "xyz": (0.125, 0.0, 0.0675 + 0.2), "beams": down, "min_range": 0.05}
-    s, _ = scan(world_at(ground, poses, robot_visible=True), mount)
+    s, _ = scan(world_at(ground, poses, robot_visible=True, robot_geometry=geometry), mount)
     assert s.status[0] == RETURN
     # the top of a 32-sided cylinder lies between R·cos(π/32) and R
     sag = 0.0675 * (1 - math.cos(math.pi / 32))
@@ -104,7 +105,7 @@ def test_self_occlusion_by_the_head():
     s2, _ = scan(world_at(ground, poses, robot_visible=False), mount)
     np.testing.assert_allclose(s2.range[0], head[2] + 0.0675 + 0.2 + 1.0, rtol=4 * F32)
     # 2 cm above the head: the head blocks the beam inside min_range (no return, marked)
-    s3, _ = scan(world_at(ground, poses, robot_visible=True), {**mount, "xyz": (0.125, 0.0, 0.0675 + 0.02)})
+    s3, _ = scan(world_at(ground, poses, robot_visible=True, robot_geometry=geometry), {**mount, "xyz": (0.125, 0.0, 0.0675 + 0.02)})
     assert s3.status[0] == TOO_CLOSE and np.isnan(s3.range[0])
 
 
