@@ -1,18 +1,26 @@
-"""In-memory signal log with preallocated rows, and its CSV form.
+"""Signal log filled in fixed-size chunks, streamed to its CSV form as they fill.
 
 Columns: ``t``, then one per element of each recorded port, named
 ``component.port`` (scalar), ``component.port[i]`` / ``[i,j]`` (arrays) or
 ``component.port.name`` when the port declares element names. Values are
 written with 17 significant digits, which round-trips float64 exactly, so the
-same run gives a bit-identical file.
+same run gives a bit-identical file (chunked or not: ``savetxt`` formats row by row).
 
-Rows are preallocated, after checking what they take against
-:func:`.limits.memory_limit_bytes` (a run that needs more is refused, naming the
-record rate that would fit). Every recorded row is checked for non-finite
-values as it is written (one dot product; the exact test only when that is not
-finite): ``record()`` returns what was not finite (component, port, element,
-value) and drops the row, so the log never holds inf, nor nan except in ports
-that declare NaN a value (``Output(may_be_nan=True)``: "not defined yet").
+Nothing is preallocated for the whole run: rows go into chunks of :data:`CHUNK_ROWS`
+rows, a new one allocated only when the last is full. With a CSV stream open
+(:meth:`Recorder.stream_to`, a run with an output folder) each chunk is appended to
+``signals.csv`` (header first) and flushed as soon as it is full, so a run killed
+midway keeps its rows up to the last full chunk. Chunks stay in memory too: after a
+run, ``log.rows``, ``log['port']``, ``RunResult[...]`` and campaign metrics read the
+whole recording. The memory limit (:func:`.limits.memory_limit_bytes`) is therefore a
+run-time stop, not an up-front refusal: when one more chunk would pass it, ``record()``
+keeps the row, says so and :attr:`Recorder.limit_reached` is set; the simulator ends the
+run there (not a blow-up: the signals so far are kept and written).
+
+Every recorded row is checked for non-finite values as it is written (one dot product;
+the exact test only when that is not finite): ``record()`` returns what was not finite
+(component, port, element, value) and drops the row, so the log never holds inf, nor nan
+except in ports that declare NaN a value (``Output(may_be_nan=True)``: "not defined yet").
 """
 
 from __future__ import annotations
@@ -23,7 +31,7 @@ import math
 
 import numpy as np
 
-from .errors import ConfigError
+from .errors import ConfigError, SnakesimError
 from .limits import fmt_bytes, memory_limit_bytes
 from .wiring import PortRef
 
@@ -37,8 +45,18 @@ def column_names(ref: PortRef, shape: tuple, names) -> list[str]:
     return [f"{base}[{','.join(map(str, idx))}]" for idx in np.ndindex(*shape)]
 
 
+#: rows per chunk (8192 rows of 10 columns: 640 kB) ...
+CHUNK_ROWS = 8192
+#: ... and at most this many bytes per chunk (wide recordings get fewer rows a chunk)
+CHUNK_BYTES = 16e6
+
+
 class Recorder:
-    def __init__(self, refs: list[PortRef], plan, n_rows: int, duration: float | None = None):
+    def __init__(self, refs: list[PortRef], plan, n_rows: int | None = None, duration: float | None = None,
+                 chunk_rows: int | None = None):
+        """``n_rows`` (the most rows the run can record) caps the chunk, so a short run allocates no more
+        than it records; ``duration`` only phrases the memory-limit hint; ``chunk_rows`` defaults to
+        :data:`CHUNK_ROWS`."""
         self.refs = refs
         self.columns = ["t"]
         self.views, self.slices = [], []
@@ -54,29 +72,68 @@ class Recorder:
             self.views.append(buf.reshape(-1))      # a view: the buffer is never reallocated
             self.slices.append(slice(col, col + buf.size))
             col += buf.size
-        need, limit = 8.0 * max(n_rows, 1) * col, memory_limit_bytes()
-        if need > limit:
-            fit = limit / (8.0 * col)
-            rate = float(f"{0.95 * fit / duration:.2g}") if duration else 0.0     # rounded down: it fits
-            hint = (f"set sim.record_rate to at most {rate:g} Hz, " if rate else "") + \
-                "record fewer ports or shorten the duration"
-            raise ConfigError(f"recording {col - 1} signal columns for {n_rows:.4g} rows needs {fmt_bytes(need)} "
-                              f"of memory; the limit is {fmt_bytes(limit)} (half the physical memory, or "
-                              f"SNAKESIM_MEMORY_LIMIT): {hint}", None, "sim.record_rate")
         self.nan_ok = np.array(nan_ok, dtype=bool)     # columns where NaN means "not defined yet"
-        self.data = np.zeros((max(n_rows, 1), col))
-        self.n = 0
+        self.duration = duration
+        self.max_rows = None if n_rows is None else max(1, int(n_rows))
+        self.limit = memory_limit_bytes()
+        chunk_rows = CHUNK_ROWS if chunk_rows is None else chunk_rows
+        rows = min(int(chunk_rows), int(CHUNK_BYTES // (8 * col)), int(self.limit // (8 * col)),
+                   self.max_rows or chunk_rows)
+        if rows < 1:
+            raise ConfigError(f"recording {col - 1} signal columns needs {fmt_bytes(8.0 * col)} a row; the memory "
+                              f"limit is {fmt_bytes(self.limit)} (half the physical memory, or "
+                              f"SNAKESIM_MEMORY_LIMIT): record fewer ports", None, "record")
+        self.chunk_rows = rows
+        self.limit_reached: str | None = None     # the stop message once the next chunk would pass the limit
+        self.chunks: list[np.ndarray] = []         # full chunks
+        self._chunk = np.empty((rows, col))        # the chunk being filled
+        self._i = 0                                # rows in it
+        self._rows, self._rows_n = None, -1        # cached concatenation, and the row count it holds
+        self._fh = None                            # the CSV stream, while open
+        self._path: Path | None = None
+        self._written = 0                          # full chunks already in the stream
 
     def record(self, t: float) -> str | None:
         """Append the recorded ports' values at ``t``; None, or (a non-finite value) what it was, the row
-        not kept."""
-        row = self.data[self.n]
+        not kept, or (the memory limit reached: :attr:`limit_reached`) the stop message, the row kept."""
+        row = self._chunk[self._i]
         row[0] = t
         for sl, v in zip(self.slices, self.views):
             row[sl] = v
         if not math.isfinite(row.dot(row)) and (~np.isfinite(row) & ~(self.nan_ok & np.isnan(row))).any():
             return self._non_finite(row)
-        self.n += 1
+        self._i += 1
+        if self._i == self.chunk_rows:
+            return self._next_chunk(t)
+        return None
+
+    def _next_chunk(self, t: float) -> str | None:
+        """The current chunk is full: keep it (streamed when a stream is open) and start the next, unless one
+        more would pass the memory limit (then the message, and no new chunk)."""
+        self.chunks.append(self._chunk)
+        self._i = 0
+        self._flush()
+        cols = len(self.columns)
+        if self.max_rows is not None and self.n >= self.max_rows:      # the run records no more
+            self._chunk, self._i = self._chunk[:0], 0
+            return None
+        need = 8.0 * (len(self.chunks) + 1) * self.chunk_rows * cols
+        if need > self.limit:
+            fit = self.limit / (8.0 * cols)
+            d = self.duration
+            rate = float(f"{0.95 * fit / d:.2g}") if d else 0.0     # rounded down: it fits
+            hint = (f"set sim.record_rate to at most {rate:g} Hz, " if rate else "lower sim.record_rate, ") + \
+                "record fewer ports or shorten the duration"
+            kept = f"; the rows so far are in {self._path}" if self._fh is not None else \
+                " (no --out: give --out DIR to keep them on disk)"
+            self.limit_reached = (
+                f"recording reached the memory limit at t = {t:.6g} s: {self.n} rows of {cols - 1} signal columns "
+                f"take {fmt_bytes(8.0 * self.n * cols)}, the limit is {fmt_bytes(self.limit)} (half the physical "
+                f"memory, or SNAKESIM_MEMORY_LIMIT){kept}; {hint}")
+            self._chunk, self._i = self._chunk[:0], 0    # no room: a further record() would fail loudly
+            return self.limit_reached
+        self._chunk = np.empty((self.chunk_rows, cols))
+        self._i = 0
         return None
 
     def _non_finite(self, row: np.ndarray) -> str:
@@ -90,8 +147,26 @@ class Recorder:
                 f"{', '.join(f'{c} = {row[i]:g}' for c, i in zip(cols, bad))}{more} (ports {', '.join(ports)})")
 
     @property
+    def n(self) -> int:
+        """Rows recorded."""
+        return len(self.chunks) * self.chunk_rows + self._i
+
+    @property
     def rows(self) -> np.ndarray:
-        return self.data[: self.n]
+        """Every recorded row, (n, columns): the chunks concatenated once, cached until the next record."""
+        n = self.n
+        if self._rows_n != n:
+            parts = self.chunks + ([self._chunk[: self._i]] if self._i else [])
+            if not parts:
+                self._rows = np.empty((0, len(self.columns)))
+            elif len(parts) == 1:
+                self._rows = parts[0]          # a view: rows already recorded never change
+            else:      # one array, and the chunks become views of it: the memory is held once, not twice
+                self._rows = np.concatenate(parts)
+                cr = self.chunk_rows
+                self.chunks = [self._rows[k * cr:(k + 1) * cr] for k in range(len(self.chunks))]
+            self._rows_n = n
+        return self._rows
 
     def __getitem__(self, key: str) -> np.ndarray:
         """One column by name, or every column of a port: ``log['pend.theta']``."""
@@ -102,7 +177,44 @@ class Recorder:
                 return self.rows[:, sl]
         raise KeyError(f"'{key}' was not recorded; recorded: {', '.join(f'{r.comp}.{r.port}' for r in self.refs)}")
 
+    # -- the CSV form ----------------------------------------------------------------------------------
+    def stream_to(self, path: Path) -> None:
+        """Open ``path`` (replacing it), write the header and every full chunk so far; later full chunks are
+        appended as they fill. :meth:`write_csv` to the same path finishes it (the partial chunk, close)."""
+        self.close()
+        self._path = Path(path)
+        self._fh = open(self._path, "w", newline="")
+        self._fh.write(",".join(self.columns) + "\n")
+        self._written = 0
+        self._flush()
+
+    def _flush(self) -> None:
+        fh = self._fh
+        if fh is None:
+            return
+        try:
+            while self._written < len(self.chunks):
+                np.savetxt(fh, self.chunks[self._written], fmt="%.17g", delimiter=",")
+                self._written += 1
+            fh.flush()      # in the OS's hands: a killed process keeps it
+        except OSError as e:      # e.g. a full disk mid-run
+            raise SnakesimError(f"could not write the run's signals to {self._path}: {e.strerror or e}") from None
+
+    def close(self) -> None:
+        """Close the stream (its file holds the header and the full chunks only)."""
+        if self._fh is not None:
+            self._fh.close()
+            self._fh = None
+
     def write_csv(self, path: Path) -> None:
+        """The whole recording as CSV; to the streamed file, only what it lacks (the last, partial chunk)."""
+        if self._fh is not None and self._path is not None and Path(path).resolve() == self._path.resolve():
+            self._flush()
+            if self._i:
+                np.savetxt(self._fh, self._chunk[: self._i], fmt="%.17g", delimiter=",")
+            self.close()
+            return
         with open(path, "w", newline="") as fh:
             fh.write(",".join(self.columns) + "\n")
-            np.savetxt(fh, self.rows, fmt="%.17g", delimiter=",")
+            for part in self.chunks + ([self._chunk[: self._i]] if self._i else []):
+                np.savetxt(fh, part, fmt="%.17g", delimiter=",")

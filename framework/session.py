@@ -6,7 +6,7 @@ import datetime
 from pathlib import Path
 
 from .assembly import Resolved, resolve
-from .errors import ConfigError
+from .errors import ConfigError, SnakesimError
 from .plan import Plan, build
 from .registry import Registry, default_registry
 from .run_reports import add_reports
@@ -62,8 +62,14 @@ class Session:
         sim = self.resolved.sim
         if out_dir is not None:
             prepare_out_dir(out_dir, overwrite=True)
+            try:      # before the first step: a killed run keeps its config beside the signals streamed so far,
+                (Path(out_dir) / "config.yaml").write_text(self.config_text())
+                for stale in ("summary.json", "last_good_state.npz"):     # and no earlier run's summary
+                    (Path(out_dir) / stale).unlink(missing_ok=True)
+            except OSError as e:
+                raise SnakesimError(f"could not write the run to {out_dir}: {e}") from None
         result = self.simulator.run(sim.duration, t0=sim.t0, progress=progress,
-                                    realtime=sim.realtime if realtime is None else realtime)
+                                    realtime=sim.realtime if realtime is None else realtime, out_dir=out_dir)
         if self.interrupted is not None:
             result.summary["interrupted"] = {**self.interrupted, "at_sim_time_s": result.summary["t_end_s"]}
         add_reports(self.plan, result.summary)          # components' report(cache, summary): framework/run_reports.py

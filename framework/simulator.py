@@ -19,6 +19,12 @@ At each base tick k (t = t0 + k·dt, never accumulated):
      its update), naming the component and port, and a linear-algebra failure
      (``LinAlgError``) in a component or the integrator, naming which.
 
+The recording grows in chunks (:mod:`.recorder`); with ``out_dir`` each full chunk is
+appended to ``signals.csv`` as it fills (``write_run`` adds the rest), so a killed run
+keeps its signals up to the last full chunk. A recording that reaches the memory limit
+ends the run there, like a stop condition (the rows so far kept), instead of being
+refused before the first step.
+
 ``request_stop(reason)`` (a signal handler: Ctrl-C, SIGTERM) ends the run at the
 next step boundary like a component's stop, never inside a kernel; a request
 made before the run starts is kept for it.
@@ -92,6 +98,11 @@ class Simulator:
             raise SnakesimError(f"duration {duration:g} s is not a whole number of steps dt = {dt:g} s "
                                 f"(nearest: {max(1, n_steps) * dt:g} s)")
         log = Recorder(plan.record_refs, plan, n_steps // plan.record_every + 1, duration)
+        if out_dir is not None:     # full chunks go to signals.csv as they fill: a killed run keeps them
+            try:
+                log.stream_to(Path(out_dir) / "signals.csv")
+            except OSError as e:
+                raise SnakesimError(f"could not write the run to {out_dir}: {e}") from None
         X, XD = plan.X, plan.XD
         np.copyto(X, self.X0)
         np.copyto(XD, self.XD0)
@@ -133,7 +144,10 @@ class Simulator:
             if k % rec_every == 0:
                 bad_out = record(t)
                 if bad_out is not None:
-                    stop_reason, bad = f"{bad_out} at t = {t:.6g} s", True
+                    if log.limit_reached:       # the row is kept; a stop, not a blow-up
+                        stop_reason = bad_out
+                    else:
+                        stop_reason, bad = f"{bad_out} at t = {t:.6g} s", True
                     break
             for what, v, nan_ok in sink_checks[phase]:
                 if not isfinite(v.dot(v)) and (np.isinf(v).any() if nan_ok else not np.isfinite(v).all()):

@@ -217,18 +217,32 @@ def test_a_step_count_beyond_the_limit_is_refused_naming_it(scene2):
     assert "sim.dt" in msg and "1e+300 steps" in msg and "at most 1e+12 steps" in msg and "dt = 1e-300" in msg
 
 
-def test_a_recording_too_large_for_memory_is_refused_before_allocating(scene2, monkeypatch):
-    monkeypatch.setenv("SNAKESIM_MEMORY_LIMIT", "1e6")
+def test_a_recording_reaching_the_memory_limit_stops_the_run_keeping_its_rows(scene2, monkeypatch, tmp_path):
+    """Nothing is preallocated for the whole run (a 1e11-row recording starts); when one more chunk would pass
+    the limit the run stops there, naming the limit and a record rate that fits, and keeps what it recorded."""
+    from snakesim.framework.recorder import CHUNK_ROWS
+
+    monkeypatch.setenv("SNAKESIM_MEMORY_LIMIT", "5e5")       # 3 columns: 2 chunks fit (393 kB), 3 do not
     s = scene2(OSC + "record: [osc.x, osc.v]\n", sim_overrides={"duration": 1e9, "dt": 0.01})
-    with pytest.raises(ConfigError) as e:
-        s.run()
-    msg = str(e.value)
-    assert "sim.record_rate" in msg and "2 signal columns for 1e+11 rows needs 2.4 TB" in msg
-    assert "the limit is 1 MB" in msg and "set sim.record_rate to at most" in msg
-    # the suggested rate fits
+    out = tmp_path / "out"
+    r = s.run(out_dir=out)
+    sm, msg = r.summary, r.summary["stop_reason"]
+    n = 2 * CHUNK_ROWS
+    t_stop = (n - 1) * 0.01
+    assert not sm["completed"] and r.last_good_state is None and r.log.n == n
+    assert msg.startswith(f"recording reached the memory limit at t = {t_stop:.6g} s: {n} rows of 2 signal columns")
+    assert "the limit is 500 kB" in msg and "SNAKESIM_MEMORY_LIMIT" in msg and "set sim.record_rate to at most" in msg
+    assert f"the rows so far are in {out / 'signals.csv'}" in msg
+    assert sm["t_end_s"] == pytest.approx(t_stop) and r.log.rows[-1, 0] == pytest.approx(t_stop)
+    data = np.loadtxt(out / "signals.csv", delimiter=",", skiprows=1)
+    np.testing.assert_array_equal(data, r.log.rows)
+    # the suggested rate fits the whole duration
     rate = float(msg.split("at most ")[1].split(" Hz")[0])
     s2 = scene2(OSC + "record: [osc.x, osc.v]\n", sim_overrides={"duration": 1e9, "dt": 0.01, "record_rate": rate})
-    assert 8 * 3 * (int(1e11) // s2.plan.record_every + 1) <= 1e6
+    assert 8 * 3 * (int(1e11) // s2.plan.record_every + 1) <= 5e5
+    # without --out the message says how to keep the rows on disk
+    r = scene2(OSC + "record: [osc.x, osc.v]\n", sim_overrides={"duration": 1e9, "dt": 0.01}).run()
+    assert "(no --out: give --out DIR to keep them on disk)" in r.summary["stop_reason"]
 
 
 # -- 2. losing data --------------------------------------------------------------------------------
