@@ -21,20 +21,9 @@ from numba import njit
 
 from ..kernel_args import record
 from .kernels_numba import add_wrench, point_contact_force
-from .sdf_kernels import _rot, np_sum, plane_active, plane_query, sample_points  # _rot: a link's axes from its quaternion
+from .sdf_kernels import _rot, link_fixed_points, np_sum, plane_active, plane_query, sample_points  # _rot: a link's axes from its quaternion
 
 K, C, MU = 0, 1, 2
-
-
-@njit(cache=True)
-def piece_centres(poses, piece_link, centre_B, R, out_centres):
-    """World centre of every piece's bounding sphere: o_l + R_l c_B."""
-    for k in range(piece_link.shape[0]):
-        b = piece_link[k]
-        _rot(poses, b, R)
-        for i in range(3):
-            out_centres[k, i] = poses[b, i] + R[i, 0] * centre_B[k, 0] + R[i, 1] * centre_B[k, 1] \
-                + R[i, 2] * centre_B[k, 2]
 
 
 @njit(cache=True)
@@ -124,7 +113,7 @@ def body_plane_step(table, work, ports, surface):
     t, w, io, f = table, work, ports, surface
     npc = t.piece_link.shape[0]
     if t.broad_phase:
-        piece_centres(io.poses, t.piece_link, t.centre_B, w.R, w.centres)
+        link_fixed_points(io.poses, t.piece_link, t.centre_B, w.R, w.centres)
         n_active = plane_active(w.centres, t.piece_r, f.origin, f.n, w.active)
     else:
         for k in range(npc):
@@ -143,7 +132,7 @@ def body_plane_step(table, work, ports, surface):
 @njit(cache=True)
 def body_centres_step(table, work, ports):
     """Broad phase, generic terrain: every piece's sphere centre into work.centres."""
-    piece_centres(ports.poses, table.piece_link, table.centre_B, work.R, work.centres)
+    link_fixed_points(ports.poses, table.piece_link, table.centre_B, work.R, work.centres)
 
 
 @njit(cache=True)

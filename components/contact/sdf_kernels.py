@@ -38,14 +38,14 @@ def _rot(poses, b, R):
 
 
 @njit(cache=True)
-def screw_centres(poses, parent_row, mount_p, R, out_centres):
-    """World centre of every screw: o_B + R_B mount_p. R is (3,3) scratch."""
-    for s in range(parent_row.shape[0]):
-        b = parent_row[s]
+def link_fixed_points(poses, link_row, p_B, R, out):
+    """World position of points fixed in links: o_l + R_l p_B for point k on link link_row[k]
+    (a screw's centre, a body piece's bounding-sphere centre). R is (3,3) scratch."""
+    for k in range(link_row.shape[0]):
+        b = link_row[k]
         _rot(poses, b, R)
         for i in range(3):
-            out_centres[s, i] = poses[b, i] + R[i, 0] * mount_p[s, 0] + R[i, 1] * mount_p[s, 1] \
-                + R[i, 2] * mount_p[s, 2]
+            out[k, i] = poses[b, i] + R[i, 0] * p_B[k, 0] + R[i, 1] * p_B[k, 1] + R[i, 2] * p_B[k, 2]
 
 
 @njit(cache=True)
@@ -288,12 +288,12 @@ def plane_contact_step(broad_phase, origin, n, region_material, sphere_r, start,
                        parent_row, screw_row, radius, lead_angle, hand, spin_dof, spin_mult, mats, v_eps, mode,
                        ev_floor, R, out_point, out_vel, out_force, out_fn, out_wrench, out_screw_fn):
     """One contact evaluation against a plane in one call (the screw_sdf hot path, one dispatch):
-    broad phase (screw_centres + plane_active, or every screw), sample_points, plane_query and
+    broad phase (link_fixed_points + plane_active, or every screw), sample_points, plane_query and
     contact_wrenches, exactly as the component calls them one by one for other terrains.
     Returns (screws tested, samples queried m, samples in contact)."""
     ns = parent_row.shape[0]
     if broad_phase:
-        screw_centres(poses, parent_row, mount_p, R, centres)
+        link_fixed_points(poses, parent_row, mount_p, R, centres)
         n_active = plane_active(centres, sphere_r, origin, n, active)
     else:
         for s in range(ns):
@@ -369,7 +369,7 @@ def plane_extremal_step(samples, work, ports, surface):
     s, w, io, f = samples, work, ports, surface
     ns = s.parent_row.shape[0]
     if s.broad_phase:
-        screw_centres(io.poses, s.parent_row, s.mount_p, w.R, w.centres)
+        link_fixed_points(io.poses, s.parent_row, s.mount_p, w.R, w.centres)
         n_active = plane_active(w.centres, s.sphere_r, f.origin, f.n, w.active)
     else:
         for a in range(ns):
@@ -501,7 +501,7 @@ def plane_step(samples, work, ports, surface):
 @njit(cache=True)
 def centres_step(samples, work, ports):
     """Broad phase, generic terrain: every screw's centre into work.centres."""
-    screw_centres(ports.poses, samples.parent_row, samples.mount_p, work.R, work.centres)
+    link_fixed_points(ports.poses, samples.parent_row, samples.mount_p, work.R, work.centres)
 
 
 @njit(cache=True)
