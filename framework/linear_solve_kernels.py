@@ -114,3 +114,48 @@ def first_order_solve(r, out, owned, Dinv, c, p_r, p_c, p_v, z):
     for i in range(r.size):
         if not owned[i]:
             out[i] = Dinv[i] * z[i]
+
+
+@njit(cache=True)
+def reduced_diagonal(out, c, q0, nv, Dinv, gf_r, gf_c, gf_v, p_ptr, p_c, p_v):
+    """out = diagonal of −c² G_F D (P_v + c P_q) (the first-order states' share of the reduced matrix,
+    :func:`reduced_matrix`) for an owner whose other terms a structured factor holds. Returns False
+    if that share has an off-diagonal entry (the structured factor cannot take it)."""
+    c2 = c * c
+    for i in range(nv):
+        out[i] = 0.0
+    for a in range(gf_r.size):
+        f = gf_c[a]
+        g = gf_v[a] * Dinv[f]
+        for b in range(p_ptr[f], p_ptr[f + 1]):
+            col = p_c[b]
+            if q0 <= col < q0 + nv:
+                j, w = col - q0, c2 * c * g * p_v[b]
+            elif q0 + nv <= col < q0 + 2 * nv:
+                j, w = col - q0 - nv, c2 * g * p_v[b]
+            else:
+                continue
+            if w == 0.0:
+                continue
+            if j != gf_r[a]:
+                return False
+            out[j] -= w
+    return True
+
+
+@njit(cache=True)
+def first_order_share(r, owned, Dinv, c, q0, nv, gf_r, gf_c, gf_v, p_r, p_c, p_v, z, rhs):
+    """rhs += c G_F D (r_F + c P_q r_q): the first-order states' share of an owner's right-hand side
+    (:func:`owner_solve`'s), z (ndx) scratch."""
+    if gf_r.size == 0:
+        return
+    for i in range(r.size):
+        z[i] = 0.0 if owned[i] else r[i]
+    for k in range(p_r.size):
+        col = p_c[k]
+        if q0 <= col < q0 + nv:
+            z[p_r[k]] += c * p_v[k] * r[col]
+    for i in range(r.size):
+        z[i] *= Dinv[i]
+    for k in range(gf_r.size):
+        rhs[gf_r[k]] += c * gf_v[k] * z[gf_c[k]]

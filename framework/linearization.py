@@ -43,12 +43,17 @@ and eliminating k_q and k_F leaves one (nv × nv) system per owner::
 
     [M − c G_v − c² G_q − c² G_F D (P_v + c P_q)] k_v = M r_v + c G_q r_q + c G_F D (r_F + c P_q r_q)
 
-with D = diag(1 / (1 − c d_F)). Its LU costs O(nv³) per Jacobian (nv = 36 for ten EELS 1.0
-modules, 306 for a hundred); each solve after it O(nv²).
+with D = diag(1 / (1 − c d_F)). Dense (M, G_q, G_v given as matrices), its LU costs O(nv³) per
+Jacobian (nv = 36 for ten EELS 1.0 modules, 306 for a hundred) and each solve O(nv²). An owner
+may instead hand a ``structured`` operator (:class:`Mechanical`) that factorises and solves
+M − c G_v − c² G_q + diag(e) itself (a multibody: on its link tree in O(links),
+components/multibody/articulated_solve_kernels.py); the first-order share is then passed as the
+diagonal e, and when it is not diagonal the owner's dense blocks are asked for instead.
 """
 
 from __future__ import annotations
 
+import operator
 from dataclasses import dataclass
 
 import numpy as np
@@ -108,15 +113,29 @@ def compose(rows, index, coef, sub: Coo) -> tuple[np.ndarray, np.ndarray, np.nda
 @dataclass
 class Mechanical:
     """A second-order owner's block: M, ∂Q/∂q, ∂Q/∂v (nv × nv) and ∂Q/∂(other states) (``GF``,
-    rows the owner's v, absolute tangent columns)."""
+    rows the owner's v, absolute tangent columns).
 
-    M: np.ndarray
-    Gq: np.ndarray
-    Gv: np.ndarray
+    ``structured`` (optional): an operator for the same M, G_q, G_v that the solve uses instead of a
+    dense LU. Methods: ``factor(c, e) -> bool`` (factorise M − c G_v − c² G_q + diag(e); False if
+    singular), ``solve_into(r, out, q0, c, extra)`` (k_v = (factorised)⁻¹ (M r_v + c G_q r_q +
+    extra) into out[q0 + nv:], k_q = r_q + c k_v into out[q0:], r_q = r[q0:q0 + nv]) and
+    ``dense() -> (M, Gq, Gv)``. With it, M, Gq and Gv may be None (:meth:`blocks` builds them)."""
+
+    M: np.ndarray | None
+    Gq: np.ndarray | None
+    Gv: np.ndarray | None
     GF: Coo | None = None
+    structured: object | None = None
+
+    def blocks(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(M, Gq, Gv) as dense matrices (from the structured operator where not given)."""
+        if self.M is None:
+            self.M, self.Gq, self.Gv = self.structured.dense()
+        return self.M, self.Gq, self.Gv
 
 
 _EMPTY = Coo(0, np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0))
+_MISSING = object()
 
 
 class Linearization:
@@ -136,11 +155,16 @@ class Linearization:
                 self._owned[s.dx] = True
         self.F = np.flatnonzero(~self._owned)      # first-order tangent indices
         self._sources = {(d.comp, d.port): (plan.components[u.comp], u.port) for d, u in plan.sources.items()}
+        # (component name, input port) -> (upstream component, its port, its (x, u, y)): looked up once
+        self._source_io = {k: (up, port, *self.io[up.name]) for k, (up, port) in self._sources.items()
+                           if up.name in self.io}
         self.t = 0.0
         self._memo: dict = {}          # this assembly's answers
+        self._memo_src: dict = {}      # this assembly's source_jacobian answers
         self._kept: dict = {}          # the last composition per input: reused while its declaration is the same object
         self.stats = {"assemblies": 0}
         self.gamma_hint = None         # the integrator's γ, for messages (c = γh)
+        self._dinv_at = (None, None)   # (c, d) of the last Dinv
 
     # -- what components ask ---------------------------------------------------------------------
     def source(self, comp, port: str):
@@ -150,26 +174,28 @@ class Linearization:
     def source_jacobian(self, comp, port: str):
         """What the component driving ``comp.port`` declares for that output (``port_jacobian``),
         with that component; (None, None) when unconnected or undeclared."""
-        key = ("src", comp.name, port)
-        if key not in self._memo:
-            src = self.source(comp, port)
+        key = (comp.name, port)
+        got = self._memo_src.get(key)
+        if got is None:
+            src = self._source_io.get(key)
             if src is None:
-                self._memo[key] = (None, None)
+                got = (None, None)
             else:
-                up, out = src
-                x, u, y = self.io[up.name]
-                self._memo[key] = (up.port_jacobian(out, self.t, x, u, y), up)
-        return self._memo[key]
+                up, out, x, u, y = src
+                got = (up.port_jacobian(out, self.t, x, u, y), up)
+            self._memo_src[key] = got
+        return got
 
     def input_jacobian(self, comp, port: str) -> Coo | None:
         """∂(comp's input ``port``, flat)/∂X (tangent) composed through Selection and Elementwise
         declarations upstream; None if some link is undeclared."""
         key = ("in", comp.name, port)
-        if key in self._memo:
-            return self._memo[key]
+        out = self._memo.get(key, _MISSING)
+        if out is not _MISSING:
+            return out
         obj, up = self.source_jacobian(comp, port)
         kept = self._kept.get(key)
-        if kept is not None and kept[0] is obj and all(self.input_jacobian(up, p) is c for p, c in kept[2]):
+        if kept is not None and kept[0] is obj and self._same_inputs(up, kept[2]):
             self._memo[key] = kept[1]                   # the same declaration over the same inputs
             return kept[1]
         out = None
@@ -184,6 +210,13 @@ class Linearization:
                 (src, self.input_jacobian(up, src)) for src in {t[0] for t in obj.terms if t[0] != "x"})
             self._kept[key] = (obj, out, deps)
         return out
+
+    def _same_inputs(self, comp, deps) -> bool:
+        """True if every (input port, composition) in ``deps`` is still what ``comp``'s input composes to."""
+        for p, c in deps:
+            if self.input_jacobian(comp, p) is not c:
+                return False
+        return True
 
     def _compose(self, comp, ew: Elementwise, skip_state: bool = False) -> Coo:
         R, C, V = [], [], []
@@ -207,24 +240,22 @@ class Linearization:
     def assemble(self, t: float) -> None:
         """Ask every component for its derivatives at the plan's current evaluation (point t, X)."""
         self.t = t
-        self._memo = {}
+        self._memo.clear()
+        self._memo_src.clear()
         self.stats["assemblies"] += 1
         n = self.ndx
-        d = np.zeros(n)
-        R, C, V = [np.zeros(0, np.int64)], [np.zeros(0, np.int64)], [np.zeros(0)]
+        parts = []
         for s in self.first:
             comp = s.comp
             x, u, y = self.io[comp.name]
-            ew = comp.state_jacobian(self.t, x, u, y)
+            ew = comp.state_jacobian(t, x, u, y)
             if ew is None:
                 continue
             key = ("state", comp.name)
-            srcs = {t[0] for t in ew.terms if t[0] != "x"}
-            ins = tuple((src, self.input_jacobian(comp, src)) for src in srcs)
             kept = self._kept.get(key)
-            if kept is not None and kept[0] is ew and all(self.input_jacobian(comp, p) is c for p, c in kept[2]):
-                di, dv, r, c, v = kept[1]
-            else:
+            if kept is None or kept[0] is not ew or not self._same_inputs(comp, kept[2]):
+                srcs = {t[0] for t in ew.terms if t[0] != "x"}
+                ins = tuple((src, self.input_jacobian(comp, src)) for src in srcs)
                 di, dv = [], []
                 for source, rows, index, coef in ew.terms:
                     if source == "x":
@@ -234,15 +265,23 @@ class Linearization:
                 dv = np.concatenate(dv) if dv else np.zeros(0)
                 m = self._compose(comp, ew, skip_state=True)
                 keep = self._owned[m.cols]                 # first-order on first-order: left out
-                r, c, v = m.rows[keep] + s.dx.start, m.cols[keep], m.vals[keep]
-                self._kept[key] = (ew, (di, dv, r, c, v), ins)
-            np.add.at(d, di, dv)
-            R.append(r), C.append(c), V.append(v)
-        self.d = d
-        rows, cols, vals = np.concatenate(R), np.concatenate(C), np.concatenate(V)
-        order = np.argsort(rows, kind="stable")            # by row, for the factor's join
-        self.P = Coo(n, rows[order], cols[order], vals[order])
-        self._p_ptr = np.searchsorted(self.P.rows, np.arange(n + 1))
+                kept = (ew, (di, dv, m.rows[keep] + s.dx.start, m.cols[keep], m.vals[keep]), ins)
+                self._kept[key] = kept
+            parts.append(kept[1])
+        # d and P are rebuilt only when some declaration changed (the same objects: the same values)
+        last = self._kept.get("first-order parts")
+        if last is None or len(last) != len(parts) or not all(map(operator.is_, last, parts)):
+            d = np.zeros(n)
+            R, C, V = [np.zeros(0, np.int64)], [np.zeros(0, np.int64)], [np.zeros(0)]
+            for di, dv, r, c, v in parts:
+                np.add.at(d, di, dv)
+                R.append(r), C.append(c), V.append(v)
+            self.d = d
+            rows, cols, vals = np.concatenate(R), np.concatenate(C), np.concatenate(V)
+            order = np.argsort(rows, kind="stable")            # by row, for the factor's join
+            self.P = Coo(n, rows[order], cols[order], vals[order])
+            self._p_ptr = np.searchsorted(self.P.rows, np.arange(n + 1))
+            self._kept["first-order parts"] = parts
         self.mech = []
         for s in self.owners:
             x, u, y = self.io[s.comp.name]
@@ -255,30 +294,51 @@ class Linearization:
     def factor(self, c: float) -> None:
         """Factorise the reduced systems of I − c·J (c = γh)."""
         self.c = c
-        self.Dinv = 1.0 / (1.0 - c * self.d)
+        if c != self._dinv_at[0] or self.d is not self._dinv_at[1]:    # d is replaced whenever it changes
+            self.Dinv = 1.0 / (1.0 - c * self.d)
+            self._dinv_at = (c, self.d)
         self.blocks = []
         P = self.P
         for s, mech in self.mech:
             nv = s.second_order
             q0 = s.dx.start
             GF = mech.GF if mech.GF is not None else _EMPTY
+            if mech.structured is not None:
+                extra = np.empty(nv)
+                if kern.reduced_diagonal(extra, c, q0, nv, self.Dinv, GF.rows, GF.cols, GF.vals, self._p_ptr,
+                                         P.cols, P.vals):
+                    if not mech.structured.factor(c, extra):
+                        raise self._singular(s, c)
+                    self.blocks.append((True, q0, nv, mech.structured, GF, None, None, np.zeros(nv)))
+                    continue
+            M, Gq, Gv = mech.blocks()
             lu, piv = np.empty((nv, nv)), np.empty(nv, np.int64)
-            kern.reduced_matrix(lu, mech.M, mech.Gq, mech.Gv, c, q0, nv, self.Dinv, GF.rows, GF.cols, GF.vals,
+            kern.reduced_matrix(lu, M, Gq, Gv, c, q0, nv, self.Dinv, GF.rows, GF.cols, GF.vals,
                                 self._p_ptr, P.cols, P.vals)
             if not kern.lu_factor(lu, piv):
-                raise FloatingPointError(f"{s.comp.name}: the implicit step's matrix M − γh∂Q/∂v − (γh)²∂Q/∂q is "
-                                         f"singular at h = {c / self.gamma_hint:g} s" if self.gamma_hint else
-                                         f"{s.comp.name}: the implicit step's matrix is singular")
-            self.blocks.append((q0, nv, mech.M, mech.Gq, GF, lu, piv, np.empty(nv)))
+                raise self._singular(s, c)
+            self.blocks.append((False, q0, nv, (M, Gq), GF, lu, piv, np.empty(nv)))
         if not hasattr(self, "_z"):
             self._z = np.empty(self.ndx)
+
+    def _singular(self, s, c) -> FloatingPointError:
+        return FloatingPointError(f"{s.comp.name}: the implicit step's matrix M − γh∂Q/∂v − (γh)²∂Q/∂q is "
+                                  f"singular at h = {c / self.gamma_hint:g} s" if self.gamma_hint else
+                                  f"{s.comp.name}: the implicit step's matrix is singular")
 
     def solve(self, r: np.ndarray, out: np.ndarray) -> None:
         """out = (I − cJ)⁻¹ r (the factorised J)."""
         c, Dinv, P, z, owned = self.c, self.Dinv, self.P, self._z, self._owned
-        for q0, nv, M, Gq, GF, lu, piv, rhs in self.blocks:
-            kern.owner_solve(r, out, owned, Dinv, c, q0, nv, M, Gq, GF.rows, GF.cols, GF.vals, P.rows, P.cols,
-                             P.vals, lu, piv, z, rhs)
+        for tree, q0, nv, op, GF, lu, piv, rhs in self.blocks:
+            if tree:
+                if GF.rows.size:
+                    rhs[:] = 0.0
+                    kern.first_order_share(r, owned, Dinv, c, q0, nv, GF.rows, GF.cols, GF.vals, P.rows, P.cols,
+                                           P.vals, z, rhs)
+                op.solve_into(r, out, q0, c, rhs)
+            else:
+                kern.owner_solve(r, out, owned, Dinv, c, q0, nv, op[0], op[1], GF.rows, GF.cols, GF.vals, P.rows,
+                                 P.cols, P.vals, lu, piv, z, rhs)
         if self.F.size:
             kern.first_order_solve(r, out, owned, Dinv, c, P.rows, P.cols, P.vals, z)
 
@@ -294,9 +354,10 @@ class Linearization:
             q0 = s.dx.start
             qs, vs = slice(q0, q0 + nv), slice(q0 + nv, q0 + 2 * nv)
             J[qs, vs] += np.eye(nv)
-            Minv = np.linalg.inv(mech.M)
-            J[vs, qs] += Minv @ mech.Gq
-            J[vs, vs] += Minv @ mech.Gv
+            M, Gq, Gv = mech.blocks()
+            Minv = np.linalg.inv(M)
+            J[vs, qs] += Minv @ Gq
+            J[vs, vs] += Minv @ Gv
             if mech.GF is not None:
                 G = np.zeros((nv, n))
                 np.add.at(G, (mech.GF.rows, mech.GF.cols), mech.GF.vals)

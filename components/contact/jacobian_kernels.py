@@ -94,33 +94,45 @@ def add_lever_quadratic(r, D, out):
     L00, L01, L02 = 0.0, r[2], -r[1]
     L10, L11, L12 = -r[2], 0.0, r[0]
     L20, L21, L22 = r[1], -r[0], 0.0
+    # (D L) row by row, kept for Lᵀ (D L) below: the same products in the same order as written out per entry
+    x00 = D[0, 0] * L00 + D[0, 1] * L10 + D[0, 2] * L20
+    x01 = D[0, 0] * L01 + D[0, 1] * L11 + D[0, 2] * L21
+    x02 = D[0, 0] * L02 + D[0, 1] * L12 + D[0, 2] * L22
+    x10 = D[1, 0] * L00 + D[1, 1] * L10 + D[1, 2] * L20
+    x11 = D[1, 0] * L01 + D[1, 1] * L11 + D[1, 2] * L21
+    x12 = D[1, 0] * L02 + D[1, 1] * L12 + D[1, 2] * L22
+    x20 = D[2, 0] * L00 + D[2, 1] * L10 + D[2, 2] * L20
+    x21 = D[2, 0] * L01 + D[2, 1] * L11 + D[2, 2] * L21
+    x22 = D[2, 0] * L02 + D[2, 1] * L12 + D[2, 2] * L22
     for i in range(3):
-        d0, d1, d2 = D[i, 0], D[i, 1], D[i, 2]
-        # (D L)[i, :]
-        x0 = d0 * L00 + d1 * L10 + d2 * L20
-        x1 = d0 * L01 + d1 * L11 + d2 * L21
-        x2 = d0 * L02 + d1 * L12 + d2 * L22
-        out[i, 0] += d0
-        out[i, 1] += d1
-        out[i, 2] += d2
-        out[i, 3] += x0
-        out[i, 4] += x1
-        out[i, 5] += x2
+        out[i, 0] += D[i, 0]
+        out[i, 1] += D[i, 1]
+        out[i, 2] += D[i, 2]
+    out[0, 3] += x00
+    out[0, 4] += x01
+    out[0, 5] += x02
+    out[1, 3] += x10
+    out[1, 4] += x11
+    out[1, 5] += x12
+    out[2, 3] += x20
+    out[2, 4] += x21
+    out[2, 5] += x22
     for j in range(3):
         c0, c1, c2 = D[0, j], D[1, j], D[2, j]
         # (Lᵀ D)[:, j]
         out[3, j] += L00 * c0 + L10 * c1 + L20 * c2
         out[4, j] += L01 * c0 + L11 * c1 + L21 * c2
         out[5, j] += L02 * c0 + L12 * c1 + L22 * c2
-    for i in range(3):
-        for j in range(3):
-            # (Lᵀ D L)[i, j] = Σ_k L[k, i] (D L)[k, j]
-            acc = 0.0
-            for k in range(3):
-                lki = (L00, L01, L02)[i] if k == 0 else ((L10, L11, L12)[i] if k == 1 else (L20, L21, L22)[i])
-                dl = D[k, 0] * ((L00, L01, L02)[j]) + D[k, 1] * ((L10, L11, L12)[j]) + D[k, 2] * ((L20, L21, L22)[j])
-                acc += lki * dl
-            out[3 + i, 3 + j] += acc
+    # (Lᵀ D L)[i, j] = Σ_k L[k, i] (D L)[k, j], summed from 0.0 in k order
+    out[3, 3] += ((0.0 + L00 * x00) + L10 * x10) + L20 * x20
+    out[3, 4] += ((0.0 + L00 * x01) + L10 * x11) + L20 * x21
+    out[3, 5] += ((0.0 + L00 * x02) + L10 * x12) + L20 * x22
+    out[4, 3] += ((0.0 + L01 * x00) + L11 * x10) + L21 * x20
+    out[4, 4] += ((0.0 + L01 * x01) + L11 * x11) + L21 * x21
+    out[4, 5] += ((0.0 + L01 * x02) + L11 * x12) + L21 * x22
+    out[5, 3] += ((0.0 + L02 * x00) + L12 * x10) + L22 * x20
+    out[5, 4] += ((0.0 + L02 * x01) + L12 * x11) + L22 * x21
+    out[5, 5] += ((0.0 + L02 * x02) + L12 * x12) + L22 * x22
 
 
 @njit(cache=True)
@@ -144,20 +156,26 @@ def contact_jacobian_blocks(m, distance, normal, material, owner, point, vel, po
     nrm = np.empty(3)
     vv = np.empty(3)
     count = 0
+    last = -1                  # rows come grouped by screw: its axis and thread once per screw
+    o = 0
+    a0 = a1 = a2 = cl = sl = 0.0
     for i in range(m):
         d = -distance[i]
         if not d > 0.0:
             continue
         s = owner[i]
-        b = parent_row[s]
-        o = screw_row[s]
-        x, y, z, w = poses[b, 3], poses[b, 4], poses[b, 5], poses[b, 6]
-        R[0, 0], R[0, 1], R[0, 2] = 1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)
-        R[1, 0], R[1, 1], R[1, 2] = 2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)
-        R[2, 0], R[2, 1], R[2, 2] = 2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)
-        a0 = R[0, 0] * axis_B[s, 0] + R[0, 1] * axis_B[s, 1] + R[0, 2] * axis_B[s, 2]
-        a1 = R[1, 0] * axis_B[s, 0] + R[1, 1] * axis_B[s, 1] + R[1, 2] * axis_B[s, 2]
-        a2 = R[2, 0] * axis_B[s, 0] + R[2, 1] * axis_B[s, 1] + R[2, 2] * axis_B[s, 2]
+        if s != last:
+            last = s
+            b = parent_row[s]
+            o = screw_row[s]
+            x, y, z, w = poses[b, 3], poses[b, 4], poses[b, 5], poses[b, 6]
+            R[0, 0], R[0, 1], R[0, 2] = 1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)
+            R[1, 0], R[1, 1], R[1, 2] = 2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)
+            R[2, 0], R[2, 1], R[2, 2] = 2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)
+            a0 = R[0, 0] * axis_B[s, 0] + R[0, 1] * axis_B[s, 1] + R[0, 2] * axis_B[s, 2]
+            a1 = R[1, 0] * axis_B[s, 0] + R[1, 1] * axis_B[s, 1] + R[1, 2] * axis_B[s, 2]
+            a2 = R[2, 0] * axis_B[s, 0] + R[2, 1] * axis_B[s, 1] + R[2, 2] * axis_B[s, 2]
+            cl, sl = math.cos(lead_angle[s]), hand[s] * math.sin(lead_angle[s])
         for j in range(3):
             nrm[j] = normal[i, j]
             vv[j] = vel[i, j]
@@ -170,7 +188,6 @@ def contact_jacobian_blocks(m, distance, normal, material, owner, point, vel, po
         if un > 1e-9:
             u0, u1, u2 = u0 / un, u1 / un, u2 / un
         cx, cy, cz = a1 * u2 - a2 * u1, a2 * u0 - a0 * u2, a0 * u1 - a1 * u0
-        cl, sl = math.cos(lead_angle[s]), hand[s] * math.sin(lead_angle[s])
         e[0], e[1], e[2] = cl * a0 - sl * cx, cl * a1 - sl * cy, cl * a2 - sl * cz
         mat = material[i]
         point_jacobian(d, nrm, vv, e, mats[mat, K], mats[mat, C], mats[mat, MU], mats[mat, EV_A], mats[mat, EV_B],
@@ -179,5 +196,56 @@ def contact_jacobian_blocks(m, distance, normal, material, owner, point, vel, po
         add_lever_quadratic(rc, Dp, d_pose[o])
         if not on_link[o]:
             on_link[o] = True
+            count += 1
+    return count
+
+
+@njit(cache=True)
+def body_jacobian_blocks(m, distance, normal, material, sample, owner, point, vel, poses, piece_link, axis_B,
+                         mu_scale, skin_ratio, mats, v_eps, mode, ev_floor, d_twist, d_pose, on_link):
+    """Body contact (body_kernels.body_contact_wrenches): per link, Σ over its samples in contact of
+    X_pᵀ ∂F/∂v X_p and X_pᵀ ∂F/∂p X_p about the link's origin (world axes), X_p = [I, −[p − o_l]×].
+    The body law is point_jacobian's with ê the skin axis R_l axis_B (projected on the tangent plane
+    inside), μ = μ_material · mu_scale, κ = skin_ratio (ev_b = 0: no load dependence). The sample is
+    fixed in the link, so its depth moves with it (δp = X_p δ_l). Blocks of links marked in on_link are
+    overwritten, others untouched; returns the number of links marked."""
+    for i in range(on_link.size):
+        if on_link[i]:
+            d_twist[i, :, :] = 0.0
+            d_pose[i, :, :] = 0.0
+            on_link[i] = False
+    Dv = np.empty((3, 3))
+    Dp = np.empty((3, 3))
+    W = np.empty((3, 3, 3))
+    e = np.empty(3)
+    rc = np.empty(3)
+    nrm = np.empty(3)
+    vv = np.empty(3)
+    count = 0
+    for i in range(m):
+        d = -distance[i]
+        if not d > 0.0:
+            continue
+        k = owner[i]
+        q = sample[i]
+        b = piece_link[k]
+        x, y, z, w = poses[b, 3], poses[b, 4], poses[b, 5], poses[b, 6]
+        r00, r01, r02 = 1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)
+        r10, r11, r12 = 2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)
+        r20, r21, r22 = 2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)
+        e[0] = r00 * axis_B[q, 0] + r01 * axis_B[q, 1] + r02 * axis_B[q, 2]
+        e[1] = r10 * axis_B[q, 0] + r11 * axis_B[q, 1] + r12 * axis_B[q, 2]
+        e[2] = r20 * axis_B[q, 0] + r21 * axis_B[q, 1] + r22 * axis_B[q, 2]
+        for j in range(3):
+            nrm[j] = normal[i, j]
+            vv[j] = vel[i, j]
+            rc[j] = point[i, j] - poses[b, j]
+        mat = material[i]
+        point_jacobian(d, nrm, vv, e, mats[mat, K], mats[mat, C], mats[mat, MU] * mu_scale[k], skin_ratio[k], 0.0,
+                       v_eps, mode, ev_floor, Dv, Dp, W)
+        add_lever_quadratic(rc, Dv, d_twist[b])
+        add_lever_quadratic(rc, Dp, d_pose[b])
+        if not on_link[b]:
+            on_link[b] = True
             count += 1
     return count

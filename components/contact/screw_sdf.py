@@ -80,6 +80,7 @@ from pydantic import Field
 
 from snakesim.framework import Component, Input, Output, Params, Uses
 from snakesim.components.materials import MaterialPatch, material_table
+from snakesim.components.multibody.linearization import LinkWrenchJacobian
 from snakesim.components.multibody.robot_model import RobotModel
 
 from ..kernel_args import bind
@@ -89,9 +90,9 @@ from .contact_set import ContactSet
 from .kernels import EV_FLOOR, MODES
 from .robot_screws import screw_layout
 from .screw_samples import ScrewContactSamples
-from .sdf_kernels import (Samples, SdfPorts, SdfWork, Surface, centres_step, plane_extremal_step, plane_step,
-                          ring_extremal_step, ring_finish_step, ring_sample_step, sample_step, seen_step,
-                          wrench_step)
+from .sdf_kernels import (Samples, SdfPorts, SdfWork, Surface, centres_step, jacobian_step, least_distance,
+                          plane_extremal_step, plane_step, ring_extremal_step, ring_finish_step, ring_sample_step,
+                          sample_step, seen_step, wrench_step)
 
 
 class ScrewSdfContactParams(Params):
@@ -158,7 +159,6 @@ class ScrewSdfContact(Component[ScrewSdfContactParams]):
         self.n_rings = int(n_rings.sum())
         #: rows of the per-contact arrays: the samples, then (exact rings) one per ring
         self.n_rows = self.n_samples + (self.n_rings if self.exact else 0)
-        self._axis_B = np.ascontiguousarray(lay.mount_R[:, :, 0])
         self._sphere_r = np.sqrt(lay.radius ** 2 + (0.5 * lay.length) ** 2) + p.margin
         self._samples = Samples(
             broad_phase=p.broad_phase, sphere_r=self._sphere_r,
@@ -197,9 +197,8 @@ class ScrewSdfContact(Component[ScrewSdfContactParams]):
         if u.terrain is not c.terrain:
             c.use_terrain(self, u.terrain)
         c.step()
-        m = int(c.counts[4])
-        if m and self.p.max_depth is not None and -c.distance[:m].min() > self.p.max_depth:
-            k = int(c.distance[:m].argmin())
+        if self.p.max_depth is not None and -c.deepest() > self.p.max_depth:
+            k = int(c.distance[:int(c.counts[4])].argmin())
             link = self.robot.links[self.screws.screw_row[c.owner[k]]]
             self.stop(f"contact on screw link '{link}' is {-c.distance[k] * 1e3:.3g} mm deep at t = {t:.6g} s, "
                       f"beyond max_depth = {self.p.max_depth * 1e3:g} mm: the step is too large for the contact "
@@ -208,20 +207,14 @@ class ScrewSdfContact(Component[ScrewSdfContactParams]):
     def port_jacobian(self, port, t, x, u, y):
         """∂wrenches/∂(screw link twist, displacement): per screw link 6×6 blocks from the last
         evaluation's contacts (jacobian_kernels.py), for linearly implicit integrators."""
-        from snakesim.components.multibody.linearization import LinkWrenchJacobian
-        from .jacobian_kernels import contact_jacobian_blocks
         c = u.cache
         if port != "wrenches" or c.terrain is _UNSET:
             return None
-        lay, p = self.screws, self.p
-        if c.jac is None:
-            c.jac = (np.zeros((lay.nl, 6, 6)), np.zeros((lay.nl, 6, 6)), np.zeros(lay.nl, dtype=np.bool_))
-        d_twist, d_pose, on = c.jac
-        contact_jacobian_blocks(int(c.counts[4]), c.distance, c.normal, c.material, c.owner, c.point, c.vel,
-                                u.link_poses, self._axis_B, lay.screw_row, lay.parent_row, lay.lead_angle, lay.hand,
-                                c.mats, p.v_eps, MODES[p.regularisation], p.ev_floor, d_twist, d_pose, on)
-        return LinkWrenchJacobian(rows=np.flatnonzero(on), d_twist=d_twist, d_pose=d_pose,
-                                  inputs=("link_poses", "link_velocities", "joint_v"))
+        if c.jac is None:           # per terrain (use_terrain resets it): the blocks and the bound kernel
+            c.jac = _jacobian_call(self, c)
+        d_twist, d_pose, on, call = c.jac
+        call()
+        return LinkWrenchJacobian(rows=np.flatnonzero(on), d_twist=d_twist, d_pose=d_pose, inputs=_JAC_INPUTS)
 
     def calc_contact_set(self, t, x, u, y):
         c = u.cache
@@ -240,6 +233,15 @@ class ScrewSdfContact(Component[ScrewSdfContactParams]):
 
 
 _UNSET = object()
+_JAC_INPUTS = ("link_poses", "link_velocities", "joint_v")
+
+
+def _jacobian_call(comp: ScrewSdfContact, c) -> tuple:
+    """(d_twist, d_pose, on_link, call): the per-link blocks (zeroed) and sdf_kernels.jacobian_step bound to
+    them, the sample tables, this run's work and ports and the terrain's surface record."""
+    nl = comp.screws.nl
+    d_twist, d_pose, on = np.zeros((nl, 6, 6)), np.zeros((nl, 6, 6)), np.zeros(nl, dtype=np.bool_)
+    return d_twist, d_pose, on, bind(jacobian_step, comp._samples, c.work, c.ports, c.surface, d_twist, d_pose, on)
 
 
 class _Cache:
@@ -251,7 +253,7 @@ class _Cache:
     __slots__ = ("comp", "terrain", "mats", "surface", "step", "step_scratch", "work", "ports", "scratch_ports", "seen",
                  "centres_call", "sample_call", "extremal_call", "finish_call", "ext_points", "ext_distance",
                  "ext_normal", "ext_material", "counts", "active", "centres", "points", "distance", "normal",
-                 "material", "sample", "owner", "point", "vel", "force", "fn", "jac")
+                 "material", "sample", "owner", "point", "vel", "force", "fn", "jac", "deepest")
 
     def __init__(self, comp: ScrewSdfContact, u, y):
         lay, n, nr = comp.screws, comp.n_rows, comp.n_rings
@@ -282,6 +284,7 @@ class _Cache:
         self.scratch_ports = SdfPorts(wrenches=np.zeros((lay.nl, 6)), screw_fn=np.zeros(lay.ns),
                                       normal_force=np.zeros(1), contacts=np.zeros(1), **ins)
         self.seen = bind(seen_step, self.work, self.ports)
+        self.deepest = bind(least_distance, self.distance, self.counts)
         self.centres_call = bind(centres_step, comp._samples, self.work, self.ports)
         self.sample_call = bind(ring_sample_step if comp.exact else sample_step, comp._samples, self.work, self.ports)
         self.extremal_call = bind(ring_extremal_step, comp._samples, self.work, self.ports)
@@ -298,6 +301,7 @@ class _Cache:
         if terrain is None:
             raise ValueError(f"{comp.name}: input 'terrain' carries no Terrain; connect a terrain component's "
                              "'terrain' output to it")
+        self.jac = None                                            # its Jacobian call binds the new surface
         self.mats = mats = comp._material_table(terrain)
         plane = type(terrain) is PlaneTerrain and comp.fast_plane
         self.surface = Surface(origin=np.array(terrain.origin if plane else (0.0, 0.0, 0.0), dtype=float),

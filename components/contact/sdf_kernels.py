@@ -18,6 +18,7 @@ import numpy as np
 from numba import njit
 
 from ..kernel_args import record
+from .jacobian_kernels import contact_jacobian_blocks
 from .kernels_numba import add_wrench, point_contact_force
 
 K, C, MU, EV_A, EV_B = range(5)
@@ -92,6 +93,9 @@ def contact_wrenches(m, distance, normal, material, sample, owner, poses, vels, 
     out_wrench[:, :] = 0.0
     out_screw_fn[:] = 0.0
     n_contact = 0
+    last = -1                  # rows come grouped by screw: its rotation, axis and thread once per screw
+    b = 0
+    ax = ay = az = cl = sl = 0.0
     for i in range(m):
         d = -distance[i]
         if not d > 0.0:
@@ -104,12 +108,15 @@ def contact_wrenches(m, distance, normal, material, sample, owner, poses, vels, 
         n_contact += 1
         s = owner[i]
         q = sample[i]
-        b = parent_row[s]
-        _rot(poses, b, R)
+        if s != last:
+            last = s
+            b = parent_row[s]
+            _rot(poses, b, R)
+            ax = R[0, 0] * axis_B[s, 0] + R[0, 1] * axis_B[s, 1] + R[0, 2] * axis_B[s, 2]
+            ay = R[1, 0] * axis_B[s, 0] + R[1, 1] * axis_B[s, 1] + R[1, 2] * axis_B[s, 2]
+            az = R[2, 0] * axis_B[s, 0] + R[2, 1] * axis_B[s, 1] + R[2, 2] * axis_B[s, 2]
+            cl, sl = math.cos(lead_angle[s]), hand[s] * math.sin(lead_angle[s])
         nx, ny, nz = normal[i, 0], normal[i, 1], normal[i, 2]
-        ax = R[0, 0] * axis_B[s, 0] + R[0, 1] * axis_B[s, 1] + R[0, 2] * axis_B[s, 2]
-        ay = R[1, 0] * axis_B[s, 0] + R[1, 1] * axis_B[s, 1] + R[1, 2] * axis_B[s, 2]
-        az = R[2, 0] * axis_B[s, 0] + R[2, 1] * axis_B[s, 1] + R[2, 2] * axis_B[s, 2]
         na = nx * ax + ny * ay + nz * az
         ux, uy, uz = -(nx - na * ax), -(ny - na * ay), -(nz - na * az)
         un = math.sqrt(ux * ux + uy * uy + uz * uz)
@@ -135,8 +142,7 @@ def contact_wrenches(m, distance, normal, material, sample, owner, poses, vels, 
         out_point[i, 0], out_point[i, 1], out_point[i, 2] = px, py, pz
         out_vel[i, 0], out_vel[i, 1], out_vel[i, 2] = vx, vy, vz
         mat = material[i]
-        # ê_v: normal to the thread line at p_c (lead angle, hand), projected in the kernel
-        cl, sl = math.cos(lead_angle[s]), hand[s] * math.sin(lead_angle[s])
+        # ê_v: normal to the thread line at p_c (lead angle, hand; cl, sl above), projected in the kernel
         fn, fx, fy, fz = point_contact_force(
             d, nx, ny, nz, vx, vy, vz, cl * ax - sl * cx, cl * ay - sl * cy, cl * az - sl * cz,
             mats[mat, K], mats[mat, C], mats[mat, MU], mats[mat, EV_A], mats[mat, EV_B], v_eps, mode, ev_floor)
@@ -581,3 +587,27 @@ def _same(a, b):
         if x[i] != y[i]:
             return False
     return True
+
+
+@njit(cache=True)
+def jacobian_step(samples, work, ports, surface, d_twist, d_pose, on_link):
+    """jacobian_kernels.contact_jacobian_blocks on the last evaluation's contacts (work), from the records
+    (one bound call instead of twenty arguments typed per call). Returns the number of links marked."""
+    s, w = samples, work
+    return contact_jacobian_blocks(w.counts[4], w.distance, w.normal, w.material, w.owner, w.point, w.vel, ports.poses,
+                                   s.axis_B, s.screw_row, s.parent_row, s.lead_angle, s.hand, surface.mats, s.v_eps,
+                                   s.mode, s.ev_floor, d_twist, d_pose, on_link)
+
+
+@njit(cache=True)
+def least_distance(distance, counts):
+    """``distance[:counts[4]].min()`` as NumPy gives it (NaN if one is NaN), +inf over no rows: the max_depth
+    watch on the last evaluation's m rows without a NumPy reduction per evaluation."""
+    out = math.inf
+    for i in range(counts[4]):
+        x = distance[i]
+        if x != x:
+            return x
+        if x < out:
+            out = x
+    return out

@@ -225,9 +225,9 @@ class JointPid(Component[JointPidParams]):
         if port != "tau":
             return None
         c = u.cache
-        live = np.abs(y.tau) < self._tmax                  # saturated joints pass nothing on
-        if c.jac_tau is None or not np.array_equal(c.jac_tau[0], live):
-            c.jac_tau = (live, self._tau_jacobian(live))
+        live = (np.abs(y.tau) < self._tmax).tobytes()      # saturated joints pass nothing on (bytes: a cheap ==)
+        if c.jac_tau is None or c.jac_tau[0] != live:
+            c.jac_tau = (live, self._tau_jacobian(np.frombuffer(live, dtype=bool)))
         return c.jac_tau[1]
 
     def _tau_jacobian(self, live):
@@ -254,9 +254,9 @@ class JointPid(Component[JointPidParams]):
         if self._discrete:
             return None
         c = u.cache
-        held = (c.dint == 0.0) & (y.error != 0.0)         # clamped integrals do not move
-        if c.jac_state is None or not np.array_equal(c.jac_state[0], held):
-            c.jac_state = (held, self._state_jacobian(held))
+        held = ((c.dint == 0.0) & (y.error != 0.0)).tobytes()     # clamped integrals do not move
+        if c.jac_state is None or c.jac_state[0] != held:
+            c.jac_state = (held, self._state_jacobian(np.frombuffer(held, dtype=bool)))
         return c.jac_state[1]
 
     def _state_jacobian(self, held):

@@ -67,10 +67,16 @@ Munthe-Kaas stage correction the framework's multi-stage integrators (RK4,
 DOPRI5, ROS2) apply so they keep their order on SE(3) (see
 tests/multibody/test_conservation.py).
 
-Cost: Pinocchio 4.1 allocates four nv³ second-order derivative tensors in every Data
-(model.new_data): 0.92 GB and ~3 s to build at 100 EELS-1.0 modules (nv = 306), 28 MB at
-30. One Data per component; ``snakesim check`` builds the unoptimised baselines (more
-Data) only with ``--baseline``.
+Forward dynamics (``params.dynamics``): ``tree`` (auto's choice unless screw_pairs is
+mimic_crba) is the articulated-body recursion on the link tree in numba
+(articulated_solve_kernels.forward_step: Newton–Euler bias forces with zero joint
+accelerations, M eliminated DOF by DOF from the leaves; equal to Pinocchio's ABA to round-off,
+tests/multibody/test_articulated_solve.py, and as fast: 97 against 109 µs at 100 modules);
+``pinocchio`` is Pinocchio's ABA. Why: Pinocchio 4.1 allocates and zeroes four nv³
+second-order derivative tensors in every Data (model.new_data): 0.92 GB and ~3 s to build at
+100 EELS-1.0 modules (nv = 306), 28 MB at 30. On the tree no Data is made at all (the model's
+Data is built on first use: ``pinocchio`` dynamics, the dense fallbacks, ``snakesim check
+--baseline``); a 100-module run peaks at ~0.28 GB instead of 1.2 GB.
 """
 
 from __future__ import annotations
@@ -86,6 +92,7 @@ from snakesim.framework import Component, ContinuousState, Input, Output, Provid
 
 from . import joint_values
 from ..port_roles import JOINT_POSITIONS, JOINT_VELOCITIES, JOINT_WRENCHES, LINK_POSES, LINK_VELOCITIES
+from .linearization import mechanical_block
 from .robot_model import RobotModel, RobotSource
 
 Vec3 = tuple[float, float, float]
@@ -110,6 +117,10 @@ class MultibodyParams(RobotSource):
     armature_floor: float = Field(1e-3, ge=0, description="kg·m², least default armature")
     damping: dict[str, float] = Field(default_factory=dict, description="N·m·s/rad by joint name or pattern")
     screw_pairs: Literal["auto", "embedded", "mimic_crba"] = "auto"
+    dynamics: Literal["auto", "tree", "pinocchio"] = Field(
+        "auto", description="forward dynamics: 'tree' the articulated-body recursion on the link tree "
+                            "(no Pinocchio Data: O(nv³) bytes), 'pinocchio' its ABA; auto: tree unless "
+                            "screw_pairs is mimic_crba")
 
 
 def _names(suffixes):
@@ -163,6 +174,7 @@ class Multibody(Component[MultibodyParams]):
         import pinocchio
 
         from . import kernels
+        from .articulated_solve_kernels import mass_matrix, tree_plan
         from .model import build_dynamics, choose_mode, tree_arrays
 
         self._pin = pinocchio
@@ -177,8 +189,17 @@ class Multibody(Component[MultibodyParams]):
         model = self.dyn.model
         if (model.nq, model.nv) != (robot.nq, robot.nv):
             raise AssertionError("internal: model layout differs from the port layout")
-        joint_values.check_mass_matrix(robot, self.dyn, self.name)
         self._ta = tree_arrays(robot.tree, model)
+        # M's and the implicit step's matrix's elimination on the link tree in O(links)
+        # (articulated_solve_kernels.py); None where a DOF's links do not hang from one body
+        self._tree_plan = tree_plan(self._ta.order, self._ta.parent, self._ta.jtype, self._ta.vidx, model.nv)[0] \
+            if self.mode != "mimic_crba" else None
+        self.forward_dynamics = ("tree" if self._tree_plan is not None else "pinocchio") if p.dynamics == "auto" \
+            else p.dynamics
+        if self.forward_dynamics == "tree" and self._tree_plan is None:
+            raise ValueError(f"{self.name}: params.dynamics = 'tree' needs every DOF's links on one body; "
+                             f"screw_pairs = '{self.mode}' keeps mimic joints apart: use 'auto' or 'pinocchio'")
+        self.structured_solve = True            # False: the implicit step's dense LU (tests compare the two)
         nq, nv = robot.nq, robot.nv
         self._nq, self._nv = nq, nv
         self._dof_v = np.array([model.joints[model.getJointId(j)].idx_v for j in robot.joints], dtype=np.int64)
@@ -188,6 +209,9 @@ class Multibody(Component[MultibodyParams]):
         self._damp = np.array([self.damping_user.get(j, 0.0) for j in robot.joints])
         self._arm_v = np.zeros(nv)
         self._arm_v[self._dof_v] = [self.armature_user.get(j, 0.0) for j in robot.joints]
+        if self._tree_plan is not None:        # M without a Pinocchio Data (model.Dynamics.data)
+            self.dyn.tree_mass_matrix = functools.partial(mass_matrix, self._ta, nv, self._arm_v)
+        joint_values.check_mass_matrix(robot, self.dyn, self.name)
         # every link but the root has a parent joint to cut across
         self._cut_links = np.array([i for i, ln in enumerate(robot.links) if ln != robot.tree.root], dtype=np.int64)
         self._g_param = np.array(p.gravity, dtype=float)
@@ -205,9 +229,7 @@ class Multibody(Component[MultibodyParams]):
     def joint_inertia(self) -> np.ndarray:
         """Apparent inertia of each DOF joint (robot.joints order) at the initial state, 1 / (M⁻¹)_ii with
         the armature in M: what a joint's PID gains act on (kg·m², or kg for a prismatic joint)."""
-        pin = self._pin
-        m = pin.crba(self.dyn.model, self.dyn.data, self._x0[:self._nq])
-        m = np.triu(m) + np.triu(m, 1).T
+        m = self.dyn.mass_matrix(self._x0[:self._nq])
         return 1.0 / np.diag(np.linalg.inv(m))[self._dof_v]
 
     def continuous_state(self):
@@ -263,15 +285,15 @@ class Multibody(Component[MultibodyParams]):
     # -- derivatives for linearly implicit integrators (framework/linearization.py) ------------------
     def port_jacobian(self, port, t, x, u, y):
         """joint_q and joint_v copy coordinates of the state's tangent ([q tangent, v], DOF columns)."""
-        from snakesim.framework.linearization import Selection
-        if self._selections is None:        # constants of the layout: the same objects every time
-            self._selections = {"joint_q": Selection(self._dof_v), "joint_v": Selection(self._nv + self._dof_v),
-                                "v": Selection(self._nv + np.arange(self._nv))}
-        return self._selections.get(port)
+        sel = self._selections
+        if sel is None:                     # constants of the layout: the same objects every time
+            from snakesim.framework.linearization import Selection
+            sel = self._selections = {"joint_q": Selection(self._dof_v), "joint_v": Selection(self._nv + self._dof_v),
+                                      "v": Selection(self._nv + np.arange(self._nv))}
+        return sel.get(port)
 
     def mechanical_jacobian(self, t, x, u, y, lin):
         """M and ∂Q/∂(q, v, other states) from the torque and wrench inputs' sources (linearization.py)."""
-        from .linearization import mechanical_block
         if self.mode == "mimic_crba":
             return None                 # its CRBA convention differs (model.py): left explicit
         return mechanical_block(self, t, x, u, y, lin)
@@ -330,11 +352,13 @@ def _not_the_state(name: str) -> ValueError:
 class _Cache:
     """One run's multibody scratch and bound kernels (see Multibody.make_cache).
 
-    The Pinocchio Data is the component's: a workspace every solve overwrites whole, one per
-    component because Pinocchio 4.1's Data holds nv³ derivative tensors (0.92 GB at 100 modules)."""
+    With ``dynamics: tree`` the solve is the link-tree kernel on its own scratch (no Data);
+    otherwise the Pinocchio Data is the component's: a workspace every solve overwrites whole, one
+    per component because Pinocchio 4.1's Data holds nv³ derivative tensors (0.92 GB at 100 modules)."""
 
     __slots__ = ("x", "q", "v", "a", "qdd", "g", "vv", "fresh", "model", "want_acc", "kin", "ports", "state", "force",
-                 "solve", "accelerations", "momentum", "energy", "ensure_kinematics", "lin_scratch", "frames", "lin_tau")
+                 "solve", "accelerations", "momentum", "energy", "ensure_kinematics", "lin_scratch", "frames", "lin_tau",
+                 "lin_op")
 
     def __init__(self, mb: Multibody, x, u, y):
         from . import kernels as k
@@ -368,8 +392,12 @@ class _Cache:
         self.energy = bind(k.energy_step, *args)
         self.ensure_kinematics = bind(k._ensure_kinematics, mb._tree, self.kin)
         self.lin_scratch = np.zeros((nl, 6, 6))          # composite blocks (linearization.tree_quadratic)
-        self.lin_tau = None                                # (torque input's Coo, its Gq, Gv, GF parts)
-        if mb.mode != "mimic_crba":
+        self.lin_tau = None                                # (torque input's Coo, its slopes: linearization.py)
+        self.lin_op = None                                 # the link-tree operator (linearization.ArticulatedW)
+        if mb.forward_dynamics == "tree":
+            from .articulated_solve_kernels import forward_step, tree_dynamics
+            self.solve = bind(forward_step, mb._tree, self.kin, tree_dynamics(mb._ta, nv, mb._arm_v, mb._tree_plan))
+        elif mb.mode != "mimic_crba":
             self.solve = functools.partial(mb._pin.aba, model, mb.dyn.data, q, v, T)
         else:
             self.solve = functools.partial(dataclasses.replace(mb.dyn, model=model).forward, q, v, T)

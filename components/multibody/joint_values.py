@@ -132,7 +132,7 @@ def check_mass_matrix(robot, dyn, owner: str) -> None:
     """Every DOF must carry inertia (mass below it or armature), or ABA divides by zero."""
     import pinocchio as pin
 
-    m = pin.crba(dyn.model, dyn.data, pin.neutral(dyn.model))
+    m = dyn.mass_matrix(pin.neutral(dyn.model))
     diag = np.diag(m)
     bad = [robot.v_names[i] for i in range(6, dyn.model.nv) if not diag[i] > 1e-12 * max(1.0, diag.max())]
     if bad:

@@ -295,19 +295,40 @@ def new_data(model: pin.Model) -> pin.Data:
     ``d2tau_dqdv``, ``d2tau_dadq``: the second-order RNEA derivatives), allocated and zeroed in
     its constructor and not reachable from Python: 4·8·nv³ bytes, 0.92 GB at nv = 306
     (100 EELS 1.0 modules), 28 MB at nv = 96 (30). createData's copy doubled that at build
-    (a 100-module run peaked at 2.0 GB, 1.1 GB after)."""
+    (a 100-module run peaked at 2.0 GB, 1.1 GB after). The constructor zeroes them, so every page
+    is touched: no layout or API of 4.1 avoids them; a multibody on its link tree makes no Data
+    (:class:`Dynamics`)."""
     DATA_MADE[0] += 1
     return pin.Data(model)
 
 
 @dataclass
 class Dynamics:
-    """One Pinocchio model and how to get accelerations from it."""
+    """One Pinocchio model and how to get accelerations from it.
+
+    Its Data is made on first use (``data``): a multibody that integrates on its link tree
+    (articulated_solve_kernels.forward_step) never needs one, and at 100 EELS 1.0 modules a Data
+    is 0.92 GB of nv³ tensors that its constructor zeroes (so every page is touched)."""
 
     mode: str                  # plain | embedded | mimic_crba
     model: pin.Model
-    data: pin.Data
+    data_: pin.Data | None
     groups: list[MimicGroup]
+    tree_mass_matrix: object = None     # q -> M on the link tree (set by the multibody), used by mass_matrix
+
+    @property
+    def data(self) -> pin.Data:
+        if self.data_ is None:
+            self.data_ = new_data(self.model)
+        return self.data_
+
+    def mass_matrix(self, q: np.ndarray) -> np.ndarray:
+        """M(q), armature included, dense and symmetric: on the link tree when the multibody set
+        ``tree_mass_matrix`` (no Data), else Pinocchio's CRBA."""
+        if self.tree_mass_matrix is not None:
+            return self.tree_mass_matrix(q)
+        m = pin.crba(self.model, self.data, q)
+        return np.triu(m) + np.triu(m, 1).T
 
     def forward(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
         """Generalised accelerations (a new array)."""
@@ -346,7 +367,7 @@ def build_dynamics(tree: LinkTree, mode: str, armature: dict[str, float],
     if mode == "embedded":
         for g in groups:
             model.armature[model.joints[model.getJointId(g.primary)].idx_v] += g.spin_inertia
-    return Dynamics(mode, model, new_data(model), groups)
+    return Dynamics(mode, model, new_data(model) if mode == "mimic_crba" else None, groups)
 
 
 def choose_mode(requested: str, groups: list[MimicGroup]) -> tuple[str, str | None]:

@@ -1,5 +1,6 @@
-"""Memory (issue 13): `check` builds the unoptimised baselines only when asked, one Pinocchio Data
-per multibody, and the BLAS thread pinning of the entry point."""
+"""Memory (issue 13): `check` builds the unoptimised baselines only when asked, no Pinocchio Data for a
+multibody on its link tree (forward dynamics and M without one: Data's nv³ tensors), at most one
+per multibody otherwise, and the BLAS thread pinning of the entry point."""
 
 from __future__ import annotations
 
@@ -22,7 +23,7 @@ def _check(*args):
 
 def test_check_builds_no_baseline_unless_asked():
     rep, made = _check()
-    assert made == 1                        # the multibody's own Data, nothing else
+    assert made == 0                        # none: the multibody integrates on its link tree, no Data
     assert not rep["timed"] and "cost_us" not in rep
     assert rep["after"]["dof"] == 6 + 3 * 3
 
