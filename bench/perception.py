@@ -3,28 +3,30 @@ geometry, frame times, and the default scene's real-time factor with the sensors
 
 rays      at each scene's initial state (the robot as the scene starts it, the terrain as the
           sensor_scene builds it), the same world rays cast (a) by raw ``embreex``: one Embree
-          scene holding the terrain mesh and the posed robot mesh, ``run(..., output=1)``, and
-          (b) by the sensor: ``Lidar.sample`` (64x1024, spinning-64) and ``StereoCamera``'s
-          render of both eyes (640x480 pinhole, sun without shadows): everything from the
-          sensor pose to the finished scan or images. Both with the instant's scene built (the
-          build, shared by every sensor of an instant: the posed robot, and a small terrain
-          with it, is timed on its own). Best of
+          scene holding the terrain mesh and the posed robot mesh, ``run(..., output=1)``, as one
+          call ("raw") and dealt out to the caster's chunks, one thread each ("raw xN": embreex
+          releases the GIL; the pipeline casts its chunks so, N = numba's thread count), and
+          (b) by the sensor:
+          ``Lidar.sample`` (64x1024, spinning-64) and ``StereoCamera``'s render of both eyes
+          (640x480 pinhole, sun without shadows): everything from the sensor pose to the
+          finished scan or images. Raw and pipeline run in turn in each repeat, best of
           ``--repeats``. pipeline/raw rays per second is the pipeline's efficiency (target ≥ 0.7).
-frames    the same sensors' full frame time, robot scene build included, in the obstacle course
-          and the moulin.
+frames    the same sensors' time on a fresh instant (link rotations and bounding spheres not yet
+          computed: nothing else is built per instant), in the obstacle course and the moulin.
 rtf       the default scene (surface-screw-traverse, its dt and integrator) with a 64x1024 lidar
           at 10 Hz and a 640x480 stereo pair at 5 Hz (``--lidar spinning-64 --stereo 640x480``),
           the same with the sensors seeing the robot's collision shapes (``robot_geometry:
-          collision``: screw envelopes, a 5x cheaper scene build per instant), and without,
-          alternately in this process, best of ``--repeats`` after a warm-up; the ratio (goal:
-          the sensors on at >= 1x real time on this 2-core machine).
+          collision``: screw envelopes instead of blades), and without, alternately in this
+          process, best of ``--repeats`` after a warm-up; the ratio (goal: the sensors on at
+          >= 1x real time on this 2-core machine).
 
-    python bench/perception.py [--repeats 3] [--duration 2] [--json FILE]
+    python bench/perception.py [--repeats 3] [--duration 2] [--only rays|rtf] [--json FILE]
 """
 
 from __future__ import annotations
 
 import argparse
+import concurrent.futures
 import json
 import os
 import platform
@@ -39,11 +41,14 @@ import numpy as np  # noqa: E402
 from snakesim.components.perception import SensorScene  # noqa: E402
 from snakesim.components.perception.attach import attach_lidar, attach_stereo  # noqa: E402
 from snakesim.components.perception.hit_kernels import rays_to_world  # noqa: E402
-from snakesim.components.perception.ray_caster import SensorWorld, embree_scene  # noqa: E402
+from snakesim.components.perception.ray_caster import (THREADS, RobotScenes, SensorWorld, chunks,  # noqa: E402
+                                                        embree_scene)
+from snakesim.components.perception.ray_caster import interleaved as cast_order  # noqa: E402
 from snakesim.framework.assembly import resolve  # noqa: E402
 from snakesim.framework.registry import default_registry  # noqa: E402
 from snakesim.framework.session import Session  # noqa: E402
 
+_POOL = concurrent.futures.ThreadPoolExecutor(THREADS)
 SCENES = {"obstacle-course": "perception-obstacle-course", "moulin": "moulin"}
 #: scenes whose robot has no head sensor frames (the moulin's EELS 1.5): mount on the front module
 MOUNTS = {"moulin": {"link": "module_03", "xyz": [0.45, 0.0, 0.1]}}
@@ -86,7 +91,7 @@ def initial_world(scene: str) -> tuple[SensorWorld, Session]:
 
 
 def fresh(world: SensorWorld) -> SensorWorld:
-    """The same instant with no robot scene built yet."""
+    """The same instant with nothing computed for it yet (link rotations and bounding spheres)."""
     return SensorWorld(world.t, world.terrain, world.robot, world.link_poses)
 
 
@@ -102,7 +107,7 @@ def best(fn, repeats: int) -> float:
 def raw_scene(world: SensorWorld):
     """One Embree scene of the terrain mesh and the posed robot mesh."""
     ter = world.terrain.surfaces
-    rob = world.robot
+    rob = world.robot.surfaces
     posed = rob.posed(world.rotations, world.link_poses[:, :3])
     V = np.vstack([ter.vertices, posed])
     F = np.vstack([ter.faces, rob.faces + len(ter.vertices)]).astype(np.int32)
@@ -117,11 +122,34 @@ def world_rays(R, p, o_l, d_l, min_range):
     return o32, d32
 
 
+def interleaved(fns: dict, repeats: int) -> dict:
+    """Best time of each function, the functions run in turn in every repeat (a machine whose load
+    drifts affects them alike)."""
+    times = {k: [] for k in fns}
+    for _ in range(repeats):
+        for k, fn in fns.items():
+            t0 = time.perf_counter()
+            fn()
+            times[k].append(time.perf_counter() - t0)
+    return {k: min(v) for k, v in times.items()}
+
+
+def raw_cast(scene, o32, d32, far, threaded: bool):
+    """Raw embreex: one ``run`` over every ray, or the rays dealt out in turn to the caster's chunks
+    (``ray_caster.interleaved``, as the sensors order them), one thread each (embreex releases the GIL)."""
+    if not threaded or len(chunks(len(o32))) == 1:
+        return scene.run(o32, d32, dists=far.copy(), query="INTERSECT", output=1)
+    order = cast_order(len(o32))
+    o32, d32 = o32[order], d32[order]
+    futures = [_POOL.submit(scene.run, o32[sl], d32[sl], far[sl].copy(), "INTERSECT", 1) for sl in chunks(len(o32))]
+    return [f.result() for f in futures]
+
+
 def rays(scene: str, repeats: int) -> dict:
     world, s = initial_world(SCENES[scene])
     lidar, stereo = s.plan.components["lidar"], s.plan.components["stereo"]
-    world.scenes()                                     # built once for the instant, as in a run
     raw = raw_scene(world)
+    world.spheres()                                    # the instant's link spheres, as in a run
 
     # the lidar: its pose, its beams, the same rays raw
     R_wl, p_wl = world.link_pose(lidar.row)
@@ -129,10 +157,11 @@ def rays(scene: str, repeats: int) -> dict:
     o32, d32 = world_rays(R, p, lidar.pattern.origins, lidar.pattern.directions, 1e-6)
     far = np.full(len(o32), lidar.max_range, np.float32)
     raw.run(o32[:10], d32[:10])
-    t_raw_l = best(lambda: raw.run(o32, d32, dists=far.copy(), query="INTERSECT", output=1), repeats)
     lidar.sample(world, 0.0, 0)
-    t_pipe_l = best(lambda: lidar.sample(world, 0.0, 0), repeats)
-    t_frame_l = best(lambda: lidar.sample(fresh(world), 0.0, 0), repeats)
+    tl = interleaved({"raw": lambda: raw_cast(raw, o32, d32, far, False),
+                      "raw_threads": lambda: raw_cast(raw, o32, d32, far, True),
+                      "pipeline": lambda: lidar.sample(world, 0.0, 0),
+                      "frame": lambda: lidar.sample(fresh(world), 0.0, 0)}, repeats)
 
     # the stereo pair: both eyes' rays raw, against both renders
     Rl, pl = stereo.pose(world)
@@ -140,26 +169,33 @@ def rays(scene: str, repeats: int) -> dict:
     eyes = [world_rays(Rc, pc, stereo._o, stereo._d, stereo.p.near) for Rc, pc in ((Rl, pl), (Rr, pr))]
     farc = np.full(len(stereo._o), stereo.p.max_range, np.float32)
     n_cam = 2 * len(stereo._o)
-    t_raw_c = best(lambda: [raw.run(a, b, dists=farc.copy(), query="INTERSECT", output=1) for a, b in eyes], repeats)
 
     def render(w):
         stereo.render(w, Rl, pl, 0.0, 0, "left")
         stereo.render(w, Rr, pr, 0.0, 0, "right")
 
     render(world)
-    t_pipe_c = best(lambda: render(world), repeats)
-    t_frame_c = best(lambda: render(fresh(world)), repeats)
-    t_build = best(lambda: fresh(world).scenes(), repeats)
+    tc = interleaved({"raw": lambda: [raw_cast(raw, a, b, farc, False) for a, b in eyes],
+                      "raw_threads": lambda: [raw_cast(raw, a, b, farc, True) for a, b in eyes],
+                      "pipeline": lambda: render(world),
+                      "frame": lambda: render(fresh(world))}, repeats)
+    t0 = time.perf_counter()
+    RobotScenes(world.robot.surfaces)
+    t_build = time.perf_counter() - t0
     n_l = len(o32)
     return {
-        "scene": SCENES[scene],
-        "terrain_faces": int(len(world.terrain.surfaces.faces)), "robot_faces": int(len(world.robot.faces)),
+        "scene": SCENES[scene], "threads": THREADS,
+        "terrain_faces": int(len(world.terrain.surfaces.faces)), "robot_faces": int(len(world.robot.surfaces.faces)),
         "lidar_rays": n_l, "camera_rays": n_cam,
-        "lidar_raw_rays_per_s": n_l / t_raw_l, "lidar_pipeline_rays_per_s": n_l / t_pipe_l,
-        "lidar_efficiency": t_raw_l / t_pipe_l, "lidar_frame_s": t_frame_l,
-        "camera_raw_rays_per_s": n_cam / t_raw_c, "camera_pipeline_rays_per_s": n_cam / t_pipe_c,
-        "camera_efficiency": t_raw_c / t_pipe_c, "stereo_frame_s": t_frame_c,
-        "robot_scene_build_s": t_build,
+        "lidar_raw_rays_per_s": n_l / tl["raw"], "lidar_raw_threads_rays_per_s": n_l / tl["raw_threads"],
+        "lidar_pipeline_rays_per_s": n_l / tl["pipeline"],
+        "lidar_efficiency": tl["raw"] / tl["pipeline"], "lidar_efficiency_threads": tl["raw_threads"] / tl["pipeline"],
+        "lidar_frame_s": tl["frame"],
+        "camera_raw_rays_per_s": n_cam / tc["raw"], "camera_raw_threads_rays_per_s": n_cam / tc["raw_threads"],
+        "camera_pipeline_rays_per_s": n_cam / tc["pipeline"],
+        "camera_efficiency": tc["raw"] / tc["pipeline"], "camera_efficiency_threads": tc["raw_threads"] / tc["pipeline"],
+        "stereo_frame_s": tc["frame"],
+        "robot_scenes_build_s": t_build,
     }
 
 
@@ -195,24 +231,26 @@ def main(argv=None) -> int:
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--duration", type=float, default=2.0, help="simulated s per real-time-factor run")
     ap.add_argument("--json", dest="json_path")
+    ap.add_argument("--only", choices=("rays", "rtf"), help="one part (default: both)")
     a = ap.parse_args(argv)
-    results = [rays(name, a.repeats) for name in SCENES]
-    print(f"{'scene':>28} {'sensor':>8} {'rays':>8} {'raw Mray/s':>10} {'pipe Mray/s':>11} {'pipe/raw':>8} "
-          f"{'frame ms':>9}")
+    results = [rays(name, a.repeats) for name in SCENES] if a.only != "rtf" else []
+    print(f"{'scene':>28} {'sensor':>8} {'rays':>8} {'raw Mray/s':>10} {f'raw x{THREADS}':>8} {'pipe Mray/s':>11} "
+          f"{'pipe/raw':>8} {f'pipe/raw x{THREADS}':>13} {'frame ms':>9}")
     for r in results:
-        print(f"{r['scene']:>28} {'lidar':>8} {r['lidar_rays']:8d} {r['lidar_raw_rays_per_s'] / 1e6:10.2f} "
-              f"{r['lidar_pipeline_rays_per_s'] / 1e6:11.2f} {r['lidar_efficiency']:8.2f} "
-              f"{1e3 * r['lidar_frame_s']:9.1f}")
-        print(f"{'':>28} {'stereo':>8} {r['camera_rays']:8d} {r['camera_raw_rays_per_s'] / 1e6:10.2f} "
-              f"{r['camera_pipeline_rays_per_s'] / 1e6:11.2f} {r['camera_efficiency']:8.2f} "
-              f"{1e3 * r['stereo_frame_s']:9.1f}")
-        print(f"{'':>28} scene build per instant {1e3 * r['robot_scene_build_s']:.1f} ms "
-              f"({r['robot_faces']} faces; terrain {r['terrain_faces']} faces)")
-    print("target: pipeline/raw >= 0.7; frame times include the instant's robot scene build")
-    t = rtf(a.duration, a.repeats)
-    print(f"\n{t['scene']}, {t['sim_time_s']:g} s, best of {a.repeats}: sensors off {t['rtf_off']:.3f}x real time, "
-          f"on {t['rtf_on']:.3f}x ({t['sensors']}), on seeing the robot's collision shapes "
-          f"{t['rtf_on_collision']:.3f}x; wall ratio on/off {t['ratio_on_off']:.2f} (goal: on >= 1x)")
+        for key, name, n in (("lidar", "lidar", "lidar_rays"), ("camera", "stereo", "camera_rays")):
+            print(f"{r['scene'] if key == 'lidar' else '':>28} {name:>8} {r[n]:8d} {r[key + '_raw_rays_per_s'] / 1e6:10.2f} "
+                  f"{r[key + '_raw_threads_rays_per_s'] / 1e6:8.2f} {r[key + '_pipeline_rays_per_s'] / 1e6:11.2f} "
+                  f"{r[key + '_efficiency']:8.2f} {r[key + '_efficiency_threads']:13.2f} "
+                  f"{1e3 * r[key + '_frame_s' if key == 'lidar' else 'stereo_frame_s']:9.1f}")
+        print(f"{'':>28} robot: {r['robot_faces']} faces in per-link scenes built once "
+              f"({1e3 * r['robot_scenes_build_s']:.0f} ms); terrain {r['terrain_faces']} faces")
+    print(f"target: pipeline/raw >= 0.7; raw = one embreex run() call, raw x{THREADS} = the rays split in {THREADS} "
+          "threads as the pipeline splits them; frame = pipeline with the instant's link spheres computed")
+    t = rtf(a.duration, a.repeats) if a.only != "rays" else {}
+    if t:
+        print(f"\n{t['scene']}, {t['sim_time_s']:g} s, best of {a.repeats}: sensors off {t['rtf_off']:.3f}x real time, "
+              f"on {t['rtf_on']:.3f}x ({t['sensors']}), on seeing the robot's collision shapes "
+              f"{t['rtf_on_collision']:.3f}x; wall ratio on/off {t['ratio_on_off']:.2f} (goal: on >= 1x)")
     if a.json_path:
         with open(a.json_path, "w") as f:
             json.dump({"machine": platform.platform(), "python": sys.version.split()[0], "rays": results, "rtf": t},

@@ -7,7 +7,8 @@
     image filters  noise, vignetting, gamma, colour: components after a camera       filters.py
 
 Shared pieces: where a sensor sits (mount.py), what it sees (surfaces.py), how rays are
-cast (ray_caster.py), how surfaces reflect (reflectance.py).
+cast (ray_caster.py: the terrain's and each link's static Embree scene; hit_kernels.py;
+refine_kernels.py: exact hits on tubes and moulins), how surfaces reflect (reflectance.py).
 """
 
 from .camera import Camera, CameraFrame, StereoCamera

@@ -41,7 +41,7 @@ from snakesim.framework import Component, Input, Output, Params, Uses
 
 from .camera_models import CameraModel, camera_model_from_spec
 from .mount import SensorMount, mount_on, quaternion_xyzw
-from .ray_caster import SensorWorld
+from .ray_caster import CastBuffers, RayBundle, SensorWorld, in_chunks, interleaved
 from .hit_kernels import develop
 
 Vec3 = tuple[float, float, float]
@@ -125,9 +125,13 @@ class _Camera(Component):
         self.model = camera_model_from_spec(p.model, p.width, p.height, where=f"{self.name}: model")
         o, d = self.model.pixel_rays()
         o, d = o.reshape(-1, 3), d.reshape(-1, 3)
-        # pixels without a ray (a 360° fisheye's corners, past a distortion's fold) stay background
+        # pixels without a ray (a 360° fisheye's corners, past a distortion's fold) stay background;
+        # the rest in the cast order that gives each thread rays from the whole image
         self._rays = np.flatnonzero(np.isfinite(d).all(axis=1) & np.isfinite(o).all(axis=1))
+        self._rays = self._rays[interleaved(len(self._rays))]
         self._o, self._d = np.ascontiguousarray(o[self._rays]), np.ascontiguousarray(d[self._rays])
+        self._bundle = RayBundle(self._o, self._d)             # binned once: finds the rays near the robot
+        self._buffers = CastBuffers(len(self._d))              # reused by every render (hits are used at once)
         self.row, self.R_ls, self.p_ls = mount_on(self.robot, p, self.name, optical=p.optical)
         self.frame_id = p.name or self.name
         light = p.light
@@ -149,7 +153,8 @@ class _Camera(Component):
                frame: str) -> CameraFrame:
         prm, light = self.p, self.p.light
         h, w = prm.height, prm.width
-        hits, o_w, d_w = world.cast_from(R, p_w, self._o, self._d, prm.max_range, prm.near)
+        hits, o_w, d_w = world.cast_from(R, p_w, self._o, self._d, prm.max_range, prm.near, self._bundle,
+                                            self._buffers)
         headlamp = light.kind == "headlamp"
         shadowed = np.zeros(len(d_w), dtype=np.bool_)
         if not headlamp and light.shadows:
@@ -162,8 +167,9 @@ class _Camera(Component):
         rng = np.full(h * w, np.nan, dtype=np.float32)
         depth = np.full(h * w, np.nan, dtype=np.float32)
         reflect = hits.color if prm.color else hits.albedo[:, None]
-        develop(self._rays, self._o[:, 2], self._d[:, 2], d_w, hits.distance, hits.normal, reflect, headlamp,
-                self._sun, light.intensity, light.ambient, light.reference_range, shadowed, image, depth, rng)
+        in_chunks(lambda c, k: develop(self._rays[k], self._o[k, 2], self._d[k, 2], d_w[k], hits.distance[k],
+                                       hits.normal[k], reflect[k], headlamp, self._sun, light.intensity, light.ambient,
+                                       light.reference_range, shadowed[k], image, depth, rng), len(d_w))
         img = image.reshape(h, w, channels)
         return CameraFrame(t, frame, self.model, img if prm.color else img[:, :, 0], depth.reshape(h, w),
                            rng.reshape(h, w), np.r_[p_w, quaternion_xyzw(R)], seq)

@@ -1,14 +1,31 @@
-"""The per-ray loops of the perception sensors, compiled (numba; every ray is independent, so
-the loops split over the cores): what Embree returns turned into hits, and hits into pixels,
-without a Python or NumPy pass per quantity.
+"""The per-ray loops of the perception sensors, compiled (numba): what Embree returns turned into
+hits, and hits into pixels, without a Python or NumPy pass per quantity.
 
-    rays_to_world   sensor-frame rays to the world (float64), and Embree's float32 copies
-                    starting at min_range
-    nearest_hits    per ray, the nearest of the terrain's and the robot's Embree hits: range,
-                    unit normal facing the ray, albedo, colour, link row, material, and
-                    whether the hit is on a face that only approximates a curved terrain
-    develop         per hit pixel, Lambertian shading (.reflectance) with a headlamp or a sun,
-                    and the pixel's range and optical-frame depth
+    rays_to_world     sensor-frame rays to the world (float64), and Embree's float32 copies
+                      starting at min_range
+    link_cones        each robot link's cone seen from a sensor bundle's origin ball: its bounding
+                      sphere's, or its box's where narrower (.ray_caster.RayBundle.link_cones)
+    bundle_candidates which rays of a sensor's bundle (rays from about one point) can meet which
+                      robot link: directions within the cone the link's bounding sphere subtends,
+                      tested only in the direction bins that cone overlaps; -> CSR lists per
+                      (chunk, link)
+    link_candidates   the same for any rays (shadow rays): the ray's segment [start, start +
+                      best·d] against the link's bounding sphere (world), culled first by
+                      spheres around groups of consecutive links; -> CSR lists per link
+    link_rays         a link's candidate rays in its link frame (float32, Embree's input), those
+                      that meet its box before their nearest hit so far (far)
+    take_link_hits    a link's Embree hits (nearer than the best so far, by construction) into
+                      the per-ray best: distance, robot face, normal turned into the world
+    finish_hits       per ray, the final hit: range from the origin, unit normal facing the ray,
+                      albedo, colour, link row, material, and whether the hit is on a face that
+                      only approximates a curved terrain
+    develop           per hit pixel, Lambertian shading (.reflectance) with a headlamp or a sun,
+                      and the pixel's range and optical-frame depth
+
+Every kernel is serial and works on one chunk of rays: the caster runs the chunks in threads
+(Embree and these kernels release the GIL; ray_caster.in_chunks). No numba parallel region:
+on a loaded machine its workers wait on descheduled threads (measured: a 65k-ray prange
+kernel of 0.25 ms took 9 ms on average with the 2 cores busy).
 """
 
 from __future__ import annotations
@@ -16,15 +33,17 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 MISS = -1
+#: ``src`` codes of take_link_hits / finish_hits: the ray's best hit so far is a robot face
+ROBOT = 2
 
 
-@njit(cache=True, nogil=True, parallel=True)
+@njit(cache=True, nogil=True)
 def rays_to_world(o_l, d_l, R, p, min_range, o_w, d_w, start32, d32):
     """o_w = p + R·o_l, d_w = R·d_l per ray; start32 = o_w + min_range·d_w and d32 in float32."""
-    for i in prange(o_l.shape[0]):
+    for i in range(o_l.shape[0]):
         for a in range(3):
             o = p[a] + R[a, 0] * o_l[i, 0] + R[a, 1] * o_l[i, 1] + R[a, 2] * o_l[i, 2]
             d = R[a, 0] * d_l[i, 0] + R[a, 1] * d_l[i, 1] + R[a, 2] * d_l[i, 2]
@@ -33,52 +52,233 @@ def rays_to_world(o_l, d_l, R, p, min_range, o_w, d_w, start32, d32):
             d32[i, a] = d
 
 
-@njit(cache=True, nogil=True, parallel=True)
-def nearest_hits(d, min_range, max_range,
-                 geom_a, t_a, prim_a, ng_a, robot_in_a,
-                 geom_b, t_b, prim_b, ng_b,
-                 albedo_t, color_t, refine_t, material_t, albedo_r, color_r, link_r,
-                 distance, normal, albedo, color, link, material, refine):
-    """Fill the output arrays (n rays) from Embree's raw hits in one or two scenes: scene A holds
-    the terrain as geometry 0 and, when ``robot_in_a``, the robot as geometry 1; scene B (raw
-    arrays of length n, else length 0: absent) holds the robot alone. Distances are from the
-    rays' start plus min_range; hits beyond max_range are misses (inf)."""
+@njit(cache=True, nogil=True, inline="always")
+def _meets(sx, sy, sz, dx, dy, dz, t1, c, r):
+    """Whether the segment s + t·d, 0 <= t <= t1 (d unit), passes within r of the point c."""
+    ox, oy, oz = c[0] - sx, c[1] - sy, c[2] - sz
+    t = min(max(ox * dx + oy * dy + oz * dz, 0.0), t1)
+    qx, qy, qz = ox - t * dx, oy - t * dy, oz - t * dz
+    return qx * qx + qy * qy + qz * qz <= r * r
+
+
+@njit(cache=True, nogil=True)
+def link_candidates(o, d, min_range, best, centre, radius, group_first, group_centre, group_radius):
+    """Rays (world origins o, unit directions d; segment from o + min_range·d over ``best``) that
+    meet each link's bounding sphere (centre (L, 3) world, radius (L,)); links are tested only
+    inside a group sphere they belong to (group g: links group_first[g] .. group_first[g+1]-1).
+    -> (offsets (L + 1,), rays): link k's rays are rays[offsets[k]:offsets[k + 1]], ascending."""
+    n, L, G = o.shape[0], centre.shape[0], group_centre.shape[0]
+    counts = np.zeros(L, dtype=np.int64)
+    for phase in range(2):
+        if phase == 1:
+            offsets = np.zeros(L + 1, dtype=np.int64)
+            for k in range(L):
+                offsets[k + 1] = offsets[k] + counts[k]
+            rays = np.empty(offsets[L], dtype=np.int64)
+            fill = offsets[:L].copy()
+        for i in range(n):
+            dx, dy, dz = d[i, 0], d[i, 1], d[i, 2]
+            sx, sy, sz = o[i, 0] + min_range * dx, o[i, 1] + min_range * dy, o[i, 2] + min_range * dz
+            t1 = best[i]
+            for g in range(G):
+                if not _meets(sx, sy, sz, dx, dy, dz, t1, group_centre[g], group_radius[g]):
+                    continue
+                for k in range(group_first[g], group_first[g + 1]):
+                    if _meets(sx, sy, sz, dx, dy, dz, t1, centre[k], radius[k]):
+                        if phase == 0:
+                            counts[k] += 1
+                        else:
+                            rays[fill[k]] = i
+                            fill[k] += 1
+    return offsets, rays
+
+
+@njit(cache=True, nogil=True)
+def link_cones(R, p, centre_b, rho, centres, radii, reach_max, use_box, link_R, link_p, box_lo, box_hi,
+               u, cos_a, sin_a):
+    """Each link's cone seen from a bundle's origin ball (centre_b sensor frame, radius rho), the
+    sensor at (R, p): axis u (L, 3) sensor frame, cos and sin of the half-angle (RayBundle.link_cones
+    says which cone and why)."""
+    o0 = np.empty(3)
+    for a in range(3):
+        o0[a] = p[a] + R[a, 0] * centre_b[0] + R[a, 1] * centre_b[1] + R[a, 2] * centre_b[2]
+    lo, hi, o_l, ax, w = np.empty(3), np.empty(3), np.empty(3), np.empty(3), np.empty(3)
+    for k in range(centres.shape[0]):
+        vx, vy, vz = centres[k, 0] - o0[0], centres[k, 1] - o0[1], centres[k, 2] - o0[2]
+        for a in range(3):               # Rᵀ(c − o₀)
+            u[k, a] = R[0, a] * vx + R[1, a] * vy + R[2, a] * vz
+        D = math.sqrt(vx * vx + vy * vy + vz * vz)
+        reach = radii[k] + rho
+        if D <= reach:
+            cos_a[k], sin_a[k] = -2.0, 0.0
+        else:
+            sin_a[k] = reach / D
+            cos_a[k] = math.sqrt(1.0 - sin_a[k] ** 2)
+            for a in range(3):
+                u[k, a] /= D
+        if use_box:
+            inside = True
+            for a in range(3):
+                lo[a], hi[a] = box_lo[k, a] - rho, box_hi[k, a] + rho
+                o_l[a] = (link_R[k, 0, a] * (o0[0] - link_p[k, 0]) + link_R[k, 1, a] * (o0[1] - link_p[k, 1])
+                          + link_R[k, 2, a] * (o0[2] - link_p[k, 2]))
+                inside = inside and lo[a] <= o_l[a] <= hi[a]
+                ax[a] = 0.5 * (lo[a] + hi[a]) - o_l[a]
+            na = math.sqrt(ax[0] ** 2 + ax[1] ** 2 + ax[2] ** 2)
+            if not inside and na > 0.0:
+                cos_box = 1.0
+                for c in range(8):
+                    for a in range(3):
+                        w[a] = (hi[a] if (c >> a) & 1 else lo[a]) - o_l[a]
+                    cos_box = min(cos_box, (w[0] * ax[0] + w[1] * ax[1] + w[2] * ax[2])
+                                  / (na * math.sqrt(w[0] ** 2 + w[1] ** 2 + w[2] ** 2)))
+                cos_box = min(cos_box * (1.0 - 1e-12), 1.0)         # past the rounding of the corners
+                if cos_box > 0.0 and cos_box > cos_a[k]:
+                    for a in range(3):       # Rᵀ R_l a / |a|
+                        wa = (link_R[k, a, 0] * ax[0] + link_R[k, a, 1] * ax[1] + link_R[k, a, 2] * ax[2]) / na
+                        w[a] = wa
+                    for a in range(3):
+                        u[k, a] = R[0, a] * w[0] + R[1, a] * w[1] + R[2, a] * w[2]
+                    cos_a[k], sin_a[k] = cos_box, math.sqrt(1.0 - cos_box * cos_box)
+        if D - reach > reach_max:
+            cos_a[k] = 2.0
+
+
+@njit(cache=True, nogil=True)
+def bundle_candidates(d, bin_first, bin_rays, bin_axis, bin_cos, bin_sin, u, cos_a, sin_a, edges):
+    """Rays of a bundle (sensor-frame unit directions d (n, 3), binned by direction: bin b holds
+    rays bin_rays[bin_first[b]:bin_first[b + 1]] within the angle (cos, sin) of bin_axis[b]) whose
+    direction lies within each link's cone (axis u (L, 3), half-angle (cos_a, sin_a); cos_a <= −1:
+    every direction, cos_a > 1: none). A bin is opened only when its cone overlaps the link's. -> (offsets
+    (C·L + 1,), rays): link k's rays of chunk c (rays edges[c] <= i < edges[c + 1]) are
+    rays[offsets[c·L + k]:offsets[c·L + k + 1]], as indices into the chunk."""
+    L, B, C = u.shape[0], bin_axis.shape[0], edges.shape[0] - 1
+    counts = np.zeros(C * L, dtype=np.int64)
+    for phase in range(2):
+        if phase == 1:
+            offsets = np.zeros(C * L + 1, dtype=np.int64)
+            for j in range(C * L):
+                offsets[j + 1] = offsets[j] + counts[j]
+            rays = np.empty(offsets[C * L], dtype=np.int64)
+            fill = offsets[:C * L].copy()
+        for k in range(L):
+            if cos_a[k] > 1.0:           # out of range: no ray
+                continue
+            every = cos_a[k] <= -1.0
+            for b in range(B):
+                if not every:
+                    # cones overlap when the axes are within a + β: cos(a + β) = cos a cos β − sin a sin β
+                    c_ab = bin_axis[b, 0] * u[k, 0] + bin_axis[b, 1] * u[k, 1] + bin_axis[b, 2] * u[k, 2]
+                    lim = cos_a[k] * bin_cos[b] - sin_a[k] * bin_sin[b]
+                    # a + β beyond π: every axis overlaps (the sum's cosine formula then no longer bounds)
+                    wide = sin_a[k] * bin_cos[b] + cos_a[k] * bin_sin[b] < 0.0
+                    if not wide and c_ab < lim:
+                        continue
+                for j in range(bin_first[b], bin_first[b + 1]):
+                    i = bin_rays[j]
+                    if not every and d[i, 0] * u[k, 0] + d[i, 1] * u[k, 1] + d[i, 2] * u[k, 2] < cos_a[k]:
+                        continue
+                    c = 0
+                    while i >= edges[c + 1]:
+                        c += 1
+                    if phase == 0:
+                        counts[c * L + k] += 1
+                    else:
+                        rays[fill[c * L + k]] = i - edges[c]
+                        fill[c * L + k] += 1
+    return offsets, rays
+
+
+@njit(cache=True, nogil=True)
+def link_rays(rays, o, d, min_range, best, R, p, box_lo, box_hi):
+    """The rays ``rays`` in a link frame (R, p the link's pose) that meet the link's box
+    [box_lo, box_hi] (link frame) before their best hit: -> (those rays, float32 starts o + min_range·d
+    and directions in the link frame, far = best: Embree's tfar, so only nearer hits return)."""
+    m = rays.shape[0]
+    kept = np.empty(m, dtype=np.int64)
+    o_l, d_l, far = np.empty((m, 3), np.float32), np.empty((m, 3), np.float32), np.empty(m, np.float32)
+    s, v = np.empty(3), np.empty(3)
+    n = 0
+    for k in range(m):
+        i = rays[k]
+        x = o[i, 0] + min_range * d[i, 0] - p[0]
+        y = o[i, 1] + min_range * d[i, 1] - p[1]
+        z = o[i, 2] + min_range * d[i, 2] - p[2]
+        for a in range(3):           # Rᵀ·(s − p), Rᵀ·d
+            s[a] = R[0, a] * x + R[1, a] * y + R[2, a] * z
+            v[a] = R[0, a] * d[i, 0] + R[1, a] * d[i, 1] + R[2, a] * d[i, 2]
+        # slab test: the segment 0 <= t <= best meets the box
+        t0, t1 = 0.0, float(best[i])
+        for a in range(3):
+            if v[a] != 0.0:
+                ta, tb = (box_lo[a] - s[a]) / v[a], (box_hi[a] - s[a]) / v[a]
+                if ta > tb:
+                    ta, tb = tb, ta
+                t0, t1 = max(t0, ta), min(t1, tb)
+            elif s[a] < box_lo[a] or s[a] > box_hi[a]:
+                t1 = -1.0
+        if t0 > t1:
+            continue
+        kept[n] = i
+        for a in range(3):
+            o_l[n, a], d_l[n, a] = s[a], v[a]
+        far[n] = best[i]
+        n += 1
+    return kept[:n], o_l[:n], d_l[:n], far[:n]
+
+
+@njit(cache=True, nogil=True)
+def take_link_hits(rays, geom, tfar, prim, ng, R, face_ids, best, src, face, ng_r):
+    """A link's hits (Embree's, link frame; cast with far = best, so every hit is nearer) into the
+    per-ray best: distance, src = ROBOT, face (the robot's face index), normal R·Ng (world)."""
+    for k in range(rays.shape[0]):
+        if geom[k] == MISS:
+            continue
+        i = rays[k]
+        best[i] = tfar[k]
+        src[i] = ROBOT
+        face[i] = face_ids[prim[k]]
+        for a in range(3):
+            ng_r[i, a] = R[a, 0] * ng[k, 0] + R[a, 1] * ng[k, 1] + R[a, 2] * ng[k, 2]
+
+
+@njit(cache=True, nogil=True)
+def finish_hits(d, min_range, max_range, best, src, face, ng_r, geom_t, prim_t, ng_t,
+                albedo_t, color_t, refine_t, material_t, albedo_r, color_r, link_r,
+                distance, normal, albedo, color, link, material, refine):
+    """Fill the output arrays from the per-ray best: the robot face ``face`` where src is ROBOT,
+    else the terrain's Embree hit (geom_t; length 0: no terrain scene), else a miss (inf).
+    Distances are from the rays' start plus min_range; hits beyond max_range are misses."""
     n = d.shape[0]
-    has_a, has_b = geom_a.shape[0] == n, geom_b.shape[0] == n
-    for i in prange(n):
-        best = math.inf
-        src = 0             # 0 none, 1 terrain (A), 2 robot in A, 3 robot in B
-        if has_a and geom_a[i] != MISS:
-            best = t_a[i]
-            src = 2 if (robot_in_a and geom_a[i] == 1) else 1
-        if has_b and geom_b[i] != MISS and t_b[i] < best:
-            best, src = t_b[i], 3
+    has_t = geom_t.shape[0] == n
+    for i in range(n):
         refine[i] = False
         material[i] = MISS
         link[i] = MISS
-        if src == 0 or best + min_range > max_range:
+        robot = src[i] == ROBOT
+        if not robot and not (has_t and geom_t[i] != MISS):
             distance[i] = math.inf
             continue
-        distance[i] = best + min_range
-        if src == 1:
-            f = prim_a[i]
-            nx, ny, nz = ng_a[i, 0], ng_a[i, 1], ng_a[i, 2]
+        r = best[i] + min_range
+        if r > max_range:
+            distance[i] = math.inf
+            continue
+        distance[i] = r
+        if robot:
+            f = face[i]
+            nx, ny, nz = ng_r[i, 0], ng_r[i, 1], ng_r[i, 2]
+            albedo[i] = albedo_r[f]
+            for c in range(3):
+                color[i, c] = color_r[f, c]
+            link[i] = link_r[f]
+        else:
+            f = prim_t[i]
+            nx, ny, nz = ng_t[i, 0], ng_t[i, 1], ng_t[i, 2]
             albedo[i] = albedo_t[f]
             for c in range(3):
                 color[i, c] = color_t[f, c]
             material[i] = material_t[f]
             refine[i] = refine_t[f]
-        else:
-            if src == 2:
-                f = prim_a[i]
-                nx, ny, nz = ng_a[i, 0], ng_a[i, 1], ng_a[i, 2]
-            else:
-                f = prim_b[i]
-                nx, ny, nz = ng_b[i, 0], ng_b[i, 1], ng_b[i, 2]
-            albedo[i] = albedo_r[f]
-            for c in range(3):
-                color[i, c] = color_r[f, c]
-            link[i] = link_r[f]
         s = 1.0 / math.sqrt(nx * nx + ny * ny + nz * nz)
         # facing the ray: a surface seen from behind (an open mesh, a wall's back) shades as its front
         if nx * d[i, 0] + ny * d[i, 1] + nz * d[i, 2] > 0.0:
@@ -86,12 +286,12 @@ def nearest_hits(d, min_range, max_range,
         normal[i, 0], normal[i, 1], normal[i, 2] = nx * s, ny * s, nz * s
 
 
-@njit(cache=True, nogil=True, parallel=True)
+@njit(cache=True, nogil=True)
 def develop(pixel, o_z, d_z, d_w, distance, normal, reflect, headlamp, to_sun, intensity, ambient,
             reference_range, shadowed, image, depth, rng):
     """Write each hit ray's pixel: image[p, :] = reflect·(ambient + E·cos θ) (E·(r_ref/r)² for a
     headlamp, l = −ray; a sun's l = to_sun, 0 where shadowed), range r, depth o_z + r·d_z."""
-    for k in prange(pixel.shape[0]):
+    for k in range(pixel.shape[0]):
         r = distance[k]
         if not math.isfinite(r):
             continue

@@ -30,9 +30,11 @@ uses robot: RobotModel: the mount link
 from __future__ import annotations
 
 import dataclasses
+import math
 from typing import Literal
 
 import numpy as np
+from numba import njit
 from pydantic import Field, model_validator
 
 from snakesim.components.multibody.robot_model import RobotModel
@@ -42,7 +44,7 @@ from snakesim.framework import Component, Input, Output, Params, Uses
 
 from .beam_patterns import PRESETS, BeamFile, BeamGrid, BeamPattern, BeamRosette
 from .mount import SensorMount, mount_on, quaternion_xyzw
-from .ray_caster import SensorWorld
+from .ray_caster import CastBuffers, RayBundle, SensorWorld, interleaved
 from .reflectance import lidar_intensity
 
 RETURN, NO_RETURN, TOO_CLOSE, DROPOUT = 0, 1, 2, 3
@@ -128,6 +130,14 @@ class Lidar(Component[LidarParams]):
         noise_needs_rate(self.name, self.rate, p.range_noise, p.dropout)
         self.row, self.R_ls, self.p_ls = mount_on(self.robot, p, self.name)
         self.frame_id = p.name or self.name
+        # beams cast in an order that gives each thread beams from the whole pattern (.ray_caster)
+        self.order = interleaved(len(self.pattern.directions))
+        self.cast_o = np.ascontiguousarray(self.pattern.origins[self.order])
+        self.cast_d = np.ascontiguousarray(self.pattern.directions[self.order])
+        self.bundle = RayBundle(self.cast_o, self.cast_d)             # binned once
+        self.buffers = CastBuffers(len(self.cast_d))                  # reused every sample
+        self.ring = self.pattern.ring.astype(np.uint16)
+        self.ring.flags.writeable = False          # one array shared by every scan
 
     def discrete_state(self):
         return np.zeros(1)       # sample counter: keys the noise draws
@@ -145,29 +155,52 @@ class Lidar(Component[LidarParams]):
         R_wl, p_wl = world.link_pose(self.row)
         R = R_wl @ self.R_ls
         origin = p_wl + R_wl @ self.p_ls
-        hits, _, d_w = world.cast_from(R, origin, pat.origins, pat.directions, self.max_range, SELF_HIT_GUARD)
-        r = hits.distance
-        status = np.full(len(r), NO_RETURN, dtype=np.uint8)
-        status[np.isfinite(r)] = RETURN
-        status[r < self.min_range] = TOO_CLOSE
-        ret = status == RETURN
-        # every beam at once, then the misses zeroed (their normals and albedos are unset)
-        with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
-            cos = np.maximum(-np.einsum("ij,ij->i", hits.normal, d_w), 0.0)
-            intensity = np.where(ret, lidar_intensity(hits.albedo, cos, r, p.reference_range,
-                                                      p.intensity == "reflectivity"), 0.0)
-        measured = np.where(ret, r, np.nan)
+        hits, _, d_w = world.cast_from(R, origin, self.cast_o, self.cast_d, self.max_range, SELF_HIT_GUARD,
+                                       self.bundle, self.buffers)
+        n = len(hits.distance)
+        status, measured, intensity = np.empty(n, dtype=np.uint8), np.empty(n), np.empty(n)
+        _returns(self.order, hits.distance, hits.normal, hits.albedo, d_w, self.min_range, p.reference_range,
+                 p.intensity == "reflectivity", status, measured, intensity)
         if p.range_noise > 0 or p.dropout > 0:
+            ret = status == RETURN
             gen = np.random.Generator(np.random.Philox(key=int(p.seed), counter=[seq, 0, 0, 0]))
             if p.range_noise > 0:
-                measured = measured + p.range_noise * gen.standard_normal(len(r))
+                measured = measured + p.range_noise * gen.standard_normal(n)
             if p.dropout > 0:
-                lost = ret & (gen.random(len(r)) < p.dropout)
+                lost = ret & (gen.random(n) < p.dropout)
                 status[lost] = DROPOUT
                 ret &= ~lost
                 measured[lost] = np.nan
                 intensity[lost] = 0.0
-        points = pat.origins + measured[:, None] * pat.directions
+        points = np.empty((n, 3), dtype=np.float32)
+        _points(pat.origins, pat.directions, measured, points)
         pose = np.r_[origin, quaternion_xyzw(R)]
-        return LidarScan(t, self.frame_id, points.astype(np.float32), measured.astype(np.float32),
-                         intensity.astype(np.float32), status, pat.ring.astype(np.uint16), pat.shape, pose, seq)
+        return LidarScan(t, self.frame_id, points, measured.astype(np.float32), intensity.astype(np.float32),
+                         status, self.ring, pat.shape, pose, seq)
+
+
+@njit(cache=True, nogil=True)
+def _returns(beam, distance, normal, albedo, d_w, min_range, reference_range, compensated, status, measured,
+             intensity):
+    """Per cast ray k (beam ``beam[k]``, pattern order in the outputs): status, measured range (NaN
+    without a return) and diffuse intensity (0 without; the rows of a miss in normal and albedo are
+    unset and never read)."""
+    for k in range(distance.shape[0]):
+        i = beam[k]
+        r = distance[k]
+        if not math.isfinite(r):
+            status[i], measured[i], intensity[i] = NO_RETURN, math.nan, 0.0
+        elif r < min_range:
+            status[i], measured[i], intensity[i] = TOO_CLOSE, math.nan, 0.0
+        else:
+            cos = max(-(normal[k, 0] * d_w[k, 0] + normal[k, 1] * d_w[k, 1] + normal[k, 2] * d_w[k, 2]), 0.0)
+            status[i], measured[i] = RETURN, r
+            intensity[i] = lidar_intensity(albedo[k], cos, r, reference_range, compensated)
+
+
+@njit(cache=True, nogil=True)
+def _points(origins, directions, measured, points):
+    """points = o + r·d (lidar frame, float32; NaN rows where r is NaN)."""
+    for i in range(origins.shape[0]):
+        for a in range(3):
+            points[i, a] = origins[i, a] + measured[i] * directions[i, a]

@@ -15,9 +15,12 @@ the light l) scatters radiance L = ρ·E·cos θ / π evenly in every direction.
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
 
+@njit(cache=True, nogil=True)
 def lidar_intensity(albedo, cos_theta, r, reference_range: float, compensated: bool) -> np.ndarray:
-    """Diffuse return of each beam: ρ·cos θ, times (r_ref / r)² unless range-compensated."""
+    """Diffuse return of each beam: ρ·cos θ, times (r_ref / r)² unless range-compensated (arrays or,
+    inside a compiled loop, one beam's scalars)."""
     i = albedo * cos_theta
     return i if compensated else i * (reference_range / r) ** 2

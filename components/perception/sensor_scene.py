@@ -2,9 +2,10 @@
 
 Every camera and lidar casts against the output of one ``sensor_scene``: the terrain
 (built into an Embree scene on the first step of a run, kept for the run) and the robot's
-link meshes at the current link poses (an Embree scene built at most once per instant, by
-the first sensor that casts, shared by the rest). Evaluating it when no sensor samples
-costs a copy of the link poses.
+link meshes at the current link poses (one Embree scene per link in its own frame, built on
+the first step and kept: rays are moved into the links' frames, nothing is rebuilt per
+instant; see .ray_caster). Evaluating it when no sensor samples costs a copy of the link
+poses.
 
     scene: {type: sensor_scene, params: {extent: 30}}
     connections: [terrain.terrain -> scene.terrain, robot.link_poses -> scene.link_poses,
@@ -27,7 +28,7 @@ from snakesim.components.port_roles import LINK_POSES
 from snakesim.components.terrain import Terrain
 from snakesim.framework import Component, Input, Output, Params, Uses
 
-from .ray_caster import SensorWorld, StaticTerrainScene
+from .ray_caster import RobotScenes, SensorWorld, StaticTerrainScene
 from .surfaces import robot_surfaces, terrain_surfaces
 
 Vec3 = tuple[float, float, float]
@@ -46,8 +47,7 @@ class SensorSceneParams(Params):
     robot_visible: bool = Field(True, description="the robot's own bodies occlude and return (self-occlusion)")
     robot_geometry: Literal["visual", "collision"] = Field(
         "visual", description="what sensors see of the robot: its URDF visuals (screw blades: ~23k faces on "
-                              "EELS 1.0) or its collision shapes (screw envelopes: ~3k faces, a cheaper scene "
-                              "build per instant)")
+                              "EELS 1.0) or its collision shapes (screw envelopes: ~3k faces)")
     robot_albedo: float | None = Field(None, ge=0, le=1, description="albedo of every link (None: the "
                                                                       "mean of each visual's URDF colour)")
 
@@ -63,7 +63,7 @@ class SensorScene(Component[SensorSceneParams]):
 
     def setup(self):
         self.nl = self.robot.nl if self.robot is not None else 0
-        self._surfaces = None
+        self._surfaces = self._robot_scenes = None
         if self.robot is not None and self.p.robot_visible:
             self._surfaces = robot_surfaces(self.robot, self.p.robot_albedo, self.p.robot_geometry)
 
@@ -78,7 +78,9 @@ class SensorScene(Component[SensorSceneParams]):
             cache.terrain = terrain
             cache.scene = StaticTerrainScene(terrain_surfaces(terrain, p.center, p.extent, p.cell, p.refine),
                                              p.refine_limit)
-        y.world = SensorWorld(t, cache.scene, self._surfaces, u.link_poses.copy() if self.nl else None)
+        if self._surfaces is not None and self._robot_scenes is None:
+            self._robot_scenes = RobotScenes(self._surfaces)       # once per component: static
+        y.world = SensorWorld(t, cache.scene, self._robot_scenes, u.link_poses.copy() if self.nl else None)
 
 
 class _TerrainCache:

@@ -1,0 +1,207 @@
+"""Compiled hit refinement for the Fourier-cylinder terrains (tube, rough tube, moulin): the
+Newton iteration of .ray_caster (f(t) = d(o + t·r), t ← t − f/f', f' = n·r, two iterations,
+a grazing or too long step keeps the mesh hit) with the terrain's distance written out per
+point instead of NumPy passes over (rays × modes) arrays. The distance is the terrain's
+own (components/terrain/analytic.py, ``FourierCylinder`` and ``Moulin``):
+
+    loc = Rᵀ(x − origin) = (u, v, s),  r = √(u² + v²),  e^{iθ} = (u + iv)/r
+    r_s = R + slope·s + Σ_j A_j cos(m_j θ + k_j s + φ_j)
+    ∇g_s = −r̂ + (∂r_s/∂θ / r_s) θ̂ + (∂r_s/∂s) ŝ
+    d = (r_s − r)/‖∇g_s‖,   n = ∇g_s/‖∇g_s‖
+    moulin: d = max(d, z − top) (the ice surface above, normal +z, region 1)
+
+The angular orders m_j are integers (the wall closes), so e^{i m θ} comes from powers of
+e^{iθ} = (u + iv)/r, with no trigonometric call; e^{i(k s + φ)} comes from a table over s
+(spacing h = 0.1 / max|k|, built once over the axial span of the terrain's mesh) turned by
+e^{i k (s − s_g)} from the nearest node s_g, a Taylor series in |k (s − s_g)| <= 0.05 to
+seventh order (error < 1e-15): no trigonometric call either (a sine and a cosine per mode
+cost ~20 ns here, the whole rotation ~5). Off the table (a point past the mesh's span) the
+sine and cosine are called. tests/perception/test_refine_kernels.py checks the distance and normal against
+the terrain's query and the refined hits against the NumPy iteration.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+#: largest angular order written as powers (the spec's m_max is small; larger falls back to NumPy)
+MAX_ORDER = 64
+#: largest |k (s − s_g)| turned by the Taylor series (sets the table's spacing)
+TAYLOR_REACH = 0.05
+#: table nodes at most (a longer span keeps the calls beyond it)
+MAX_NODES = 200_000
+
+
+class FourierRefiner:
+    """The compiled refinement of one Fourier-cylinder terrain (``for_terrain`` returns None for
+    other kinds: they keep the NumPy iteration)."""
+
+    def __init__(self, shaft, surface: bool, top: float, region_material, span=(0.0, 0.0)):
+        self.origin = np.asarray(shaft.origin, dtype=np.float64)
+        self.R = np.ascontiguousarray(shaft.R, dtype=np.float64)
+        self.radius, self.slope = float(shaft.radius), float(shaft.slope)
+        modes = np.asarray(shaft.modes, dtype=np.float64).reshape(-1, 4)
+        self.A, self.k, self.phase = modes[:, 0].copy(), modes[:, 2].copy(), modes[:, 3].copy()
+        self.m = modes[:, 1].astype(np.int64)
+        self.surface, self.top = bool(surface), float(top)
+        self.region_material = np.asarray(region_material, dtype=np.int64)
+        # e^{i(k s_g + φ)} at nodes s_g = s0 + g·h over the span (s along the axis)
+        kmax = float(np.abs(self.k).max(initial=0.0))
+        self.h = TAYLOR_REACH / kmax if kmax > 0 else 1.0
+        nodes = min(MAX_NODES, int(np.ceil((span[1] - span[0]) / self.h)) + 2) if len(self.k) else 0
+        self.m = self.m if len(self.m) else np.zeros(0, dtype=np.int64)
+        self.s0 = float(span[0])
+        arg = (self.s0 + self.h * np.arange(nodes))[:, None] * self.k + self.phase
+        self.table = np.ascontiguousarray(np.stack([np.cos(arg), np.sin(arg)]))     # (2, G, J)
+        self.Am, self.Ak = self.A * self.m, self.A * self.k
+
+    @staticmethod
+    def for_terrain(terrain, vertices=None, margin: float = 1.0) -> "FourierRefiner | None":
+        """The refiner of ``terrain`` (None: not a Fourier cylinder), its table spanning the axial
+        extent of ``vertices`` (world, the sensor mesh) plus ``margin`` m."""
+        from snakesim.components.terrain.analytic import FourierCylinder, Moulin
+
+        if isinstance(terrain, Moulin):
+            shaft, surface, top = terrain.shaft, terrain.surface, terrain.top
+        elif isinstance(terrain, FourierCylinder):
+            shaft, surface, top = terrain, False, 0.0
+        else:
+            return None
+        m = np.asarray(shaft.modes, dtype=np.float64).reshape(-1, 4)[:, 1]
+        if not np.all((m == np.round(m)) & (m >= 0) & (m <= MAX_ORDER)):
+            return None
+        span = (0.0, 0.0)
+        if vertices is not None and len(vertices):
+            s = (np.asarray(vertices, dtype=np.float64) - shaft.origin) @ shaft.R[:, 2]
+            span = (float(s.min()) - margin, float(s.max()) + margin)
+        return FourierRefiner(shaft, surface, top, terrain.region_material, span)
+
+    def refine(self, o, d, rays, iterations: int, grazing: float, limit: float, albedo_m, color_m, distance, normal,
+               albedo, color, material):
+        """Newton from the mesh hits (``distance``) of rays ``rays`` of (o, d (n, 3)); in place where it
+        converges (``newton``)."""
+        newton(o, d, rays, iterations, grazing, limit, self.origin, self.R, self.radius, self.slope, self.A,
+               self.m, self.k, self.phase, self.Am, self.Ak, int(self.m.max(initial=0)), self.table, self.s0, self.h,
+               self.surface, self.top, self.region_material, albedo_m, color_m, distance, normal, albedo, color,
+               material)
+
+    def query(self, points):
+        """(distance (n,), normal (n, 3), material (n,)) at world points: the terrain's query."""
+        n = len(points)
+        dist, nrm, mat = np.empty(n), np.empty((n, 3)), np.empty(n, dtype=np.int64)
+        query_points(np.ascontiguousarray(points, dtype=np.float64), self.origin, self.R, self.radius, self.slope,
+                     self.A, self.m, self.k, self.phase, self.Am, self.Ak, int(self.m.max(initial=0)), self.table,
+                     self.s0, self.h,
+                     self.surface, self.top, self.region_material, dist, nrm, mat)
+        return dist, nrm, mat
+
+
+@njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
+def _distance(x, y, z, origin, R, radius, slope, A, m, k, phase, Am, Ak, order, powers, table, s0, h, surface, top, n):
+    """Signed distance at (x, y, z) and the unit normal into n (3,); -> (distance, region).
+    ``powers`` scratch (4, max(order + 1, J)), order = max m."""
+    px, py, pz = x - origin[0], y - origin[1], z - origin[2]
+    u = R[0, 0] * px + R[1, 0] * py + R[2, 0] * pz
+    v = R[0, 1] * px + R[1, 1] * py + R[2, 1] * pz
+    s = R[0, 2] * px + R[1, 2] * py + R[2, 2] * pz
+    r = math.hypot(u, v)
+    if r > 0.0:
+        ct, st = u / r, v / r
+    else:
+        ct, st = 1.0, 0.0          # θ = atan2(0, 0) = 0, as the terrain's
+    # e^{i m θ}, m = 0 .. M, by powers of e^{iθ} (rows 0, 1: real, imaginary), then per mode (rows 2, 3)
+    J = A.shape[0]
+    powers[0, 0], powers[1, 0] = 1.0, 0.0
+    for q in range(1, order + 1):
+        a, b = powers[0, q - 1], powers[1, q - 1]
+        powers[0, q], powers[1, q] = a * ct - b * st, a * st + b * ct
+    for j in range(J):
+        powers[2, j], powers[3, j] = powers[0, m[j]], powers[1, m[j]]
+    cm, sm = powers[2], powers[3]
+    rs, drs_t, drs_s = radius + slope * s, 0.0, slope
+    g = int(math.floor((s - s0) / h + 0.5))
+    if 0 <= g < table.shape[1]:
+        ds = s - (s0 + g * h)
+        tc, ts = table[0, g], table[1, g]
+        for j in range(J):
+            # e^{i(k s_g + φ)} · e^{i k ds}, |k ds| <= TAYLOR_REACH
+            e = k[j] * ds
+            e2 = e * e
+            ce = 1.0 - e2 * (0.5 - e2 * (1.0 / 24.0 - e2 * (1.0 / 720.0)))
+            se = e * (1.0 - e2 * (1.0 / 6.0 - e2 * (1.0 / 120.0 - e2 * (1.0 / 5040.0))))
+            cw = tc[j] * ce - ts[j] * se
+            sw = ts[j] * ce + tc[j] * se
+            sn = sm[j] * cw + cm[j] * sw              # sin(mθ + ks + φ)
+            rs += A[j] * (cm[j] * cw - sm[j] * sw)    # cos(mθ + ks + φ)
+            drs_t -= Am[j] * sn
+            drs_s -= Ak[j] * sn
+    else:
+        for j in range(J):
+            ks = k[j] * s + phase[j]
+            cw, sw = math.cos(ks), math.sin(ks)
+            sn = sm[j] * cw + cm[j] * sw
+            rs += A[j] * (cm[j] * cw - sm[j] * sw)
+            drs_t -= Am[j] * sn
+            drs_s -= Ak[j] * sn
+    gt = drs_t / rs
+    n0, n1, n2 = -ct - gt * st, -st + gt * ct, drs_s
+    norm = math.sqrt(n0 * n0 + n1 * n1 + n2 * n2)
+    dist = (rs - r) / norm
+    n0, n1, n2 = n0 / norm, n1 / norm, n2 / norm
+    for a in range(3):
+        n[a] = R[a, 0] * n0 + R[a, 1] * n1 + R[a, 2] * n2
+    if surface and z - top > dist:
+        n[0], n[1], n[2] = 0.0, 0.0, 1.0
+        return z - top, 1
+    return dist, 0
+
+
+@njit(cache=True, nogil=True)
+def query_points(p, origin, R, radius, slope, A, m, k, phase, Am, Ak, order, table, s0, h, surface, top,
+                 region_material, dist, normal, material):
+    powers = np.empty((4, max(order + 1, A.shape[0])))
+    for i in range(p.shape[0]):
+        dist[i], region = _distance(p[i, 0], p[i, 1], p[i, 2], origin, R, radius, slope, A, m, k, phase, Am, Ak,
+                                    order, powers, table, s0, h, surface, top, normal[i])
+        material[i] = region_material[region]
+
+
+@njit(cache=True, nogil=True)
+def newton(o, d, rays, iterations, grazing, limit, origin, R, radius, slope, A, m, k, phase, Am, Ak, order, table, s0,
+           h, surface, top, region_material, albedo_m, color_m, distance, normal, albedo, color, material):
+    """The NumPy iteration of .ray_caster.StaticTerrainScene._refine, written out, for the rays
+    ``rays`` of (o, d) from their mesh hits ``distance``: where it converges, the refined distance,
+    normal facing the ray, material and its albedo and colour (albedo_m, color_m per material)
+    replace the mesh hit's in place."""
+    powers = np.empty((4, max(order + 1, A.shape[0])))
+    n = np.empty(3)
+    for q in range(rays.shape[0]):
+        i = rays[q]
+        t0 = distance[i]
+        t = t0
+        good = True
+        slope_r = 0.0
+        region = 0
+        for _ in range(iterations):
+            dist, region = _distance(o[i, 0] + t * d[i, 0], o[i, 1] + t * d[i, 1], o[i, 2] + t * d[i, 2], origin, R,
+                                     radius, slope, A, m, k, phase, Am, Ak, order, powers, table, s0, h, surface,
+                                     top, n)
+            slope_r = n[0] * d[i, 0] + n[1] * d[i, 1] + n[2] * d[i, 2]
+            good = good and abs(slope_r) > grazing
+            if good:
+                t = t - dist / slope_r
+        if not (good and abs(t - t0) < limit):
+            continue
+        distance[i] = t
+        # normal and material from the last query, one Newton step before t
+        sign = -1.0 if slope_r > 0 else 1.0
+        for a in range(3):
+            normal[i, a] = n[a] * sign
+        mat = region_material[region]
+        material[i] = mat
+        albedo[i] = albedo_m[mat]
+        for c in range(3):
+            color[i, c] = color_m[mat, c]
