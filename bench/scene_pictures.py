@@ -19,7 +19,7 @@ from validation_scenes import run  # noqa: E402
 
 HORIZONS = {"surface-screw-traverse": 45.0, "tube-dangling": 6.0, "parallel-walls-climb": 4.0,
             "u-channel": 6.0, "moulin": 6.0, "dem-surface": 15.0, "eels-lateral-undulation": 8.0,
-            "eels-sidewinding": 8.0, "mini-eels-crawl": 10.0, "mini-eels-pipe-climb": 4.0}
+            "eels-sidewinding": 8.0, "mini-eels-crawl": 10.0, "u-channel-brace-traverse": 20.0, "mini-eels-pipe-climb": 4.0}
 
 
 def draw(scene, horizon, out: Path):

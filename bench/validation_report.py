@@ -8,7 +8,11 @@ docstrings say which closed form, conservation law or model prediction it compar
 prints one row per test with its outcome. Nothing is re-implemented here: the tests are the
 checks. Part 2 runs the default scene for its full 45 s at a few settings and prints, for each,
 the max tail x, y and yaw error against the reference (rk4, dt = 0.25 ms, cached in
-bench/results/), with the paper's model-vs-hardware error for scale (4 cm, 0.06 rad).
+bench/results/), with the paper's model-vs-hardware error for scale (4 cm, 0.06 rad). Part 3
+runs the vertical-mobility scenes (bench/vertical_mobility.py's list: the successes and the
+failure variant) and prints each one's field-test evaluation (paper 4.3.1: contact, static hold,
+vertical distance, failure and its reason, tether slack) and the bodies the scene lets into the
+terrain (terrain_clearance).
 """
 
 from __future__ import annotations
@@ -39,6 +43,14 @@ CHECKS = {  # test module -> what it checks against
     "tests/monitors/test_mobility.py": "mobility monitor tilt and metrics",
     "tests/validation/test_traverse.py": "default scene: motion direction per screw combination, reference error",
     "tests/validation/test_scenes.py": "scenes: dangling tension = weight, climb failure stop, support",
+    "tests/monitors/test_vertical_mobility.py": "field-test evaluation against scripted runs",
+    "tests/control/test_brace_climb.py": "brace: Σ friction along gravity = weight, rolling at ω r, climb/descent",
+    "tests/validation/test_fts_braced.py": "FTS = −(distal contact forces + weight) by Newton, braced",
+    "tests/validation/test_u_channel_traverse.py": "U-channel traverse at the screws' analytic steady speed",
+    "tests/control/test_pipe_climb.py": "Mini EELS pipe climb: per-cycle gain vs no-slip roll, step convergence",
+    "tests/contact/test_body_contact.py": "body contact: F/k sink, slope slide/creep, anisotropy, vs hull back end",
+    "tests/contact/test_screw_sdf_curved.py": "curved terrain: sink F/k at every roll and spin angle",
+    "tests/multibody/test_articulated_solve.py": "O(N) implicit solve = dense solve; tree dynamics = Pinocchio ABA",
 }
 
 
@@ -80,10 +92,36 @@ def traverse_rows() -> list[dict]:
     return rows
 
 
+def vertical_rows() -> list[dict]:
+    sys.path.insert(0, str(ROOT / "bench"))
+    from vertical_mobility import SCENES, measure
+
+    rows = []
+    for scene in SCENES:
+        row, _s, r = measure(scene)
+        row["clearance"] = r.summary.get("reports", {}).get("clearance")
+        rows.append(row)
+    return rows
+
+
+def _evaluation_line(row: dict) -> str:
+    ev, cl = row["evaluation"], row.get("clearance")
+    if not ev:
+        return f"| {row['scene']} | — | — | — | — | {row['stop_reason']} | — |"
+    c, h, d, f = ev["contact"], ev["hold"], ev["vertical_distance"], ev["failure"]
+    inside = "not watched" if cl is None else "none" if not cl["inside"] else \
+        ", ".join(f"{k} {1e3 * v:.0f} mm" for k, v in list(cl["inside"].items())[:3])
+    tether = f"; tether slack {100 * ev['tether']['slack_fraction']:.0f} %" if "tether" in ev else ""
+    return (f"| {row['scene']} | {c['time_s'] if c['made'] else 'never'} | {h['longest_s']:.3g} s "
+            f"({'held' if h['achieved'] else 'not held'}) | +{d['up_m']:.3g} / −{d['down_m']:.3g} m | "
+            f"{f['reason'] if f['failed'] else 'none'}{tether} | {row['stop_reason']} | {inside} |")
+
+
 @click.command()
 @click.option("--no-traverse", is_flag=True, help="Skip the 45 s traverse comparison.")
+@click.option("--no-vertical", is_flag=True, help="Skip the vertical-mobility scenes.")
 @click.option("--json", "json_path", type=click.Path(dir_okay=False))
-def main(no_traverse, json_path):
+def main(no_traverse, no_vertical, json_path):
     rows = run_checks()
     print("| check | test | outcome | s |\n|---|---|---|---:|")
     for r in rows:
@@ -99,6 +137,14 @@ def main(no_traverse, json_path):
         for r in tr:
             print(f"| {r['setting']} | {r['x_err_m']:.2e} | {r['y_err_m']:.2e} | {r['yaw_err_rad']:.2e} | {r['rtf']:.3g} | {r['stop']} |")
         out["traverse"] = tr
+    if not no_vertical:
+        print("\nVertical mobility (paper 4.3.1's evaluation, each scene at its production step)\n")
+        print("| scene | contact s | longest hold | up / down | failure | run's stop | bodies inside the terrain |\n"
+              "|---|---|---|---|---|---|---|")
+        vr = vertical_rows()
+        for r in vr:
+            print(_evaluation_line(r))
+        out["vertical"] = vr
     if json_path:
         Path(json_path).write_text(json.dumps(out, indent=1) + "\n")
     sys.exit(1 if bad else 0)

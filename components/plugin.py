@@ -21,6 +21,9 @@ def builtin_components() -> tuple:
     from .examples.pendulum import Pendulum, ViscousDamper
     from .monitors import MobilityMonitor
     from .monitors.vertical_mobility import VerticalMobilityEvaluation
+    from .monitors.traverse import TraverseEvaluation
+    from .monitors.terrain_clearance import TerrainClearance
+    from .monitors.joint_limits import JointLimits
     from .control.brace_climb import BraceClimb
     from .monitors.planar_pose import PlanarPose
     from .control.screw_schedule import ScrewSchedule
@@ -31,17 +34,20 @@ def builtin_components() -> tuple:
     from .signals.blocks import Gain, Sum, ZeroOrderHold
     from .signals.sources import Constant, Sine, Step
     from .sensors import ForceTorqueSensors, Imu
+    from .sensors.fts_wall_loads import FtsWallLoads
     from .tethers import Tethers, WrenchSum
     from .viz import RerunSink
     from .ros2 import Ros2Commands, Ros2Publisher, Ros2SensorBridge, Ros2SimControl, Ros2TetherCommands
     from .ros2.mcap_recorder import Ros2McapRecorder
+    from .ros2.sensor_mcap import Ros2SensorMcap
+    from .ros2.gait_commands import Ros2GaitCommands
 
     return (Constant, Step, Sine, Gain, Sum, ZeroOrderHold, Pendulum, ViscousDamper, PointMass, SpringDamper,
             PointContact, HullContact, TerrainSource, Multibody, ScrewSdfContact, BodyContact, ScrewDrive,
-            JointPid, JointSpringDamper, JointSetpoints, SerpenoidGait, HelicalGait, CsvTrajectory, Schedule, ForceTorqueSensors,
-            Imu, Tethers, WrenchSum, MobilityMonitor, VerticalMobilityEvaluation, BraceClimb, RerunSink, PlanarPose, ScrewSchedule, Ros2Publisher,
-            Ros2Commands, Ros2SensorBridge, Ros2SimControl, Ros2McapRecorder, Ros2TetherCommands,
-            *PLACEMENT, *PERCEPTION)
+            JointPid, JointSpringDamper, JointSetpoints, SerpenoidGait, HelicalGait, CsvTrajectory, Schedule, ForceTorqueSensors, FtsWallLoads,
+            Imu, Tethers, WrenchSum, MobilityMonitor, VerticalMobilityEvaluation, TraverseEvaluation, TerrainClearance, JointLimits, BraceClimb, RerunSink, PlanarPose, ScrewSchedule, Ros2Publisher,
+            Ros2Commands, Ros2SensorBridge, Ros2SimControl, Ros2McapRecorder, Ros2SensorMcap, Ros2TetherCommands,
+            Ros2GaitCommands, *PLACEMENT, *PERCEPTION)
 
 
 def __getattr__(name):

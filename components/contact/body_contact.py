@@ -31,6 +31,12 @@ Broad phase (``broad_phase``): one bounding sphere per piece (collision element)
 ``terrain.distance_lower_bound``; only pieces whose bound is ≤ 0 are sampled and queried.
 A plane is queried inside numba in one call.
 
+Jacobian (``port_jacobian``, for rosenbrock_w): per link, Σ over its samples in contact of
+X_pᵀ (∂F/∂v) X_p and X_pᵀ (∂F/∂p) X_p about the link origin (X_p = [I, −[p − o_l]×]; ∂F from eq. 2
+and the regularised eq. 6 with the skin axis, jacobian_kernels.body_jacobian_blocks), read by the
+multibody as the screw contact's are. Left out, as there: the turning of lever arms, normals and
+skin axes with the link (tests/contact/test_body_contact_jacobian.py).
+
 Material: the terrain's per-sample material (materials.Material: k, c, μ; its ev_a, ev_b
 describe screw threads and are not read here); any field of ``material`` (MaterialPatch)
 overrides it for every terrain material.
@@ -144,12 +150,14 @@ class BodyContact(Component[BodyContactParams]):
             raise ValueError(f"{self.name}: {e}") from None
         skins = [self._skin(self.robot.links[row]) for row in s.piece_link]
         self.n_samples = s.n
+        mu_scale = np.array([k.across for k in skins], dtype=np.float64)
+        skin_ratio = np.array([k.along / k.across for k in skins], dtype=np.float64)
         self._table = BodyTable(
             broad_phase=p.broad_phase, piece_link=s.piece_link, centre_B=s.piece_centre, piece_r=s.piece_radius,
-            start=s.start, points_B=s.points, axis_B=s.axis,
-            mu_scale=np.array([k.across for k in skins], dtype=np.float64),
-            skin_ratio=np.array([k.along / k.across for k in skins], dtype=np.float64),
+            start=s.start, points_B=s.points, axis_B=s.axis, mu_scale=mu_scale, skin_ratio=skin_ratio,
             v_eps=p.v_eps, mode=MODES[p.regularisation], ev_floor=p.ev_floor)
+        # port_jacobian's constant arguments (the record's fields are numba-side only)
+        self._jac_table = (s.piece_link, s.axis, mu_scale, skin_ratio)
 
     def stiffness_hint(self, u, readers):
         """Penalty contact on the lightest sampled link, one point at once (:mod:`.stiffness_hint`)."""
@@ -183,6 +191,27 @@ class BodyContact(Component[BodyContactParams]):
                           f"max_depth = {self.p.max_depth * 1e3:g} mm: the step is too large for the contact "
                           f"stiffness (see the run's step_check) or the material too soft")
 
+    def port_jacobian(self, port, t, x, u, y):
+        """∂wrenches/∂(link twist, displacement): per link 6×6 blocks Σ X_pᵀ (∂F/∂v) X_p and
+        Σ X_pᵀ (∂F/∂p) X_p over the last evaluation's samples in contact
+        (jacobian_kernels.body_jacobian_blocks), for linearly implicit integrators. Left out, as for the
+        screws: the rotation of lever arms, normals and skin axes with the link."""
+        from snakesim.components.multibody.linearization import LinkWrenchJacobian
+        from .jacobian_kernels import body_jacobian_blocks
+        c = u.cache
+        if port != "wrenches" or c.terrain is _UNSET:
+            return None
+        nl, p = self.robot.nl, self.p
+        piece_link, axis_B, mu_scale, skin_ratio = self._jac_table
+        if c.jac is None:
+            c.jac = (np.zeros((nl, 6, 6)), np.zeros((nl, 6, 6)), np.zeros(nl, dtype=np.bool_))
+        d_twist, d_pose, on = c.jac
+        body_jacobian_blocks(int(c.counts[4]), c.distance, c.normal, c.material, c.sample, c.owner, c.points, c.vel,
+                             u.link_poses, piece_link, axis_B, mu_scale, skin_ratio, c.mats,
+                             p.v_eps, MODES[p.regularisation], p.ev_floor, d_twist, d_pose, on)
+        return LinkWrenchJacobian(rows=np.flatnonzero(on), d_twist=d_twist, d_pose=d_pose,
+                                  inputs=("link_poses", "link_velocities"))
+
     def calc_contact_set(self, t, x, u, y):
         c = u.cache
         if u.terrain is not c.terrain:
@@ -206,13 +235,14 @@ class _Cache:
 
     __slots__ = ("comp", "terrain", "step", "step_scratch", "seen", "centres_call", "sample_call", "counts",
                  "active", "centres", "points", "distance", "normal", "material", "sample", "owner", "vel", "force",
-                 "fn", "work", "ports", "scratch_ports")
+                 "fn", "work", "ports", "scratch_ports", "mats", "jac")
 
     def __init__(self, comp: BodyContact, u, y):
         s, n, nl = comp.samples, comp.n_samples, comp.robot.nl
         self.comp = comp
         self.terrain = _UNSET
         self.step = self.step_scratch = None
+        self.mats = self.jac = None
         self.active = np.arange(s.n_pieces, dtype=np.int64)
         self.centres = np.zeros((s.n_pieces, 3))
         self.points, self.vel, self.force, self.normal = (np.zeros((n, 3)) for _ in range(4))
@@ -246,6 +276,7 @@ class _Cache:
                              "'terrain' output to it")
         p = comp.p
         mats = material_table(terrain.materials, p.material, fn_max=p.fn_max, ev_floor=p.ev_floor, owner=comp.name)
+        self.mats = mats
         plane = type(terrain) is PlaneTerrain and comp.fast_plane
         surface = Surface(origin=np.array(terrain.origin if plane else (0.0, 0.0, 0.0), dtype=float),
                           n=np.array(terrain.n if plane else (0.0, 0.0, 1.0), dtype=float),

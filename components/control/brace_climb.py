@@ -1,23 +1,49 @@
 """A reference brace-and-climb controller for vertical mobility (paper 4.3): a baseline to beat.
 
-The body is braced across a shaft (two walls, a tube) by one bend *amplitude* A that scales a
-fixed bend pattern (default every bend joint +1: a C whose ends press one wall and middle the
-other); A is regulated on the measured wall loads; the screws are braked until ``climb_start``
-and then turn at the climb speeds while the brace is kept::
+The body is braced across a shaft (two walls, a tube) by one *amplitude* A that scales a
+fixed bend/twist pattern (default every bend joint +1: a C whose ends press one wall and middle the
+other; a helix in a tube widens by untwisting: twist joints −1) and a feed-forward torque pattern; A is regulated on the measured wall loads; the screws
+are braked until ``climb_start``, turn at the climb speeds until ``climb_stop`` (ramped over
+``spin_up`` both ways) and are braked again, while the brace is kept all along::
 
-    load      L = mean (or min, ``regulate``) of the ``loads`` input over the screws (N):
-              contact.screw_normal_force, or wall loads estimated from the FTS array
+    load      L = mean (or min, ``regulate``) of the ``loads`` input over the screws (``load_screws``; N):
+              contact.screw_normal_force (ground truth), or what the robot measures: fts_wall_loads.loads
+              (each segment's wall load from the FTS array; walls-body-brace-climb.yaml)
     brace     A_{k+1} = clip(A_k + T·clip(gain·(F* − L)/F*, −max_rate, max_rate), A_min, A_max)
               at every sample of period T (``rate``), in every phase: the brace is held while climbing
+              (A_min < 0 lets the loop relieve a squeeze that builds up while the screws roll)
     lost      a screw whose load falls below lost_fraction·F* counts as out of contact; L then uses
               the min (recovery: the amplitude rises until every screw is back on a wall)
     set-points  bend/twist j: base_j + A·pattern_j (rad) (twist joints: + twist);
-                screw j: 0 before climb_start, then speed·climb_sign_j (rad/s, the PID's velocity mode;
-                its integral brakes the screws at 0)
+                screw j: ω_j = r(t)·ω*·climb_sign_j (rad/s, the PID's velocity mode; its integral
+                brakes the screws at ω_j = 0), with the drive ramp
+                r(t) = clip((t − climb_start)/spin_up, 0, 1) − clip((t − climb_stop)/spin_up, 0, 1)
+                (spin_up = 0: steps)
     feed-forward  tau_ff[j] = A·torque_pattern_j (N·m): a pre-load in proportion to the amplitude
                 (e.g. a placement's latched pre-load torques for A = 1 at the target load)
 
-``target`` (F*) and ``speed`` are parameters, overridable at run time through the optional
+How a braced screw robot climbs (walls-brace-climb.yaml, walls-brace-climb-down.yaml). A turning screw
+pressed on a wall slides in its surface direction ê_φ = â × ê_c (â its axis, ê_c towards the wall):
+its friction there is ≈ μF_n (eq. 6), far above the thread's axial thrust, and reacts the screw's
+torque. Between two parallel walls with a planar brace (every â in the plane normal to the walls),
+ê_φ is horizontal: turning screws on the two walls make a yaw couple that nothing opposes (a
+compressed brace is unstable in yaw; only static friction held it), so the robot rolls like a log
+about the vertical at ω r / (gap/2) and loses the brace in ~0.1 s, whatever the thread anisotropy.
+Tilting the brace plane by β about the wall normal turns every ê_φ on a wall into the same direction
+(−cos β, 0, sin β) (opposite on the other wall): with the screws on the two walls turning in opposite
+senses (``climb_signs``) every contact rolls the same way, and the whole robot translates like a
+wheeled vehicle at ω r along the brace plane's normal, climbing at ω r sin β with no yaw couple. The
+weight is carried by static (creep) friction; nothing slides. Stiff screw speed loops and twists keep
+every contact rolling at one speed and direction (a mismatch winds the brace up or down; ``regulate:
+min`` with A_min < 0 absorbs what remains). In a tube the log roll is harmless: a braced C's screws
+turning the same way only orbit it about the axis (at ω r / R), neither lifting nor lowering it; a
+screw descent there needs every screw axis leaned out of the plane through the axis by the same angle
+α about its own wall normal (the C twisted into a one-turn chordal helix, which a tilted planar C
+cannot give): screws turning the same way then roll the robot down a helix, orbiting, at ≈ ω r sin α
+(tube-brace-descend.yaml: leans 5-11°, the robot sinks between its slowest and fastest screw's rolling
+speed).
+
+``target`` (F*) and ``speed`` (ω*) are parameters, overridable at run time through the optional
 ``target_force`` and ``climb_speed`` inputs (wire a ROS 2 command or a schedule; NaN or
 unconnected: the parameter). Descend with a negative speed.
 
@@ -25,7 +51,8 @@ in   loads[ns]        N, per screw wall load (feedthrough-free: sampled at the r
      target_force[1]  N (optional), climb_speed[1] rad/s (optional)
 out  setpoint[nj]     rad (bend, twist) or rad/s (screws), the multibody's DOF joint order
      tau_ff[nj]       N·m, to the PID's feed-forward
-     amplitude[1]     rad, A;  phase[1]: 0 brace/hold, 1 climbing;  load[1]: L, N
+     amplitude[1]     rad, A;  phase[1]: 0 brace/hold, 1 driving (ramps included), 2 braked after
+                      climb_stop;  load[1]: L, N
 uses robot: RobotModel (the multibody's): joint names and kinds
 """
 
@@ -44,6 +71,15 @@ from .joint_selection import finite_or_raise, per_joint
 A, PHASE, LOAD, NX = 0, 1, 2, 3
 
 
+def drive_ramp(t: float, start: float, stop: float, spin_up: float) -> float:
+    """r(t) of the docstring: 0 before ``start``, 1 between the ramps, 0 again ``spin_up`` after ``stop``."""
+    if spin_up <= 0:
+        return float(start <= t < stop)
+    up = min(max((t - start) / spin_up, 0.0), 1.0)
+    down = min(max((t - stop) / spin_up, 0.0), 1.0) if stop < float("inf") else 0.0
+    return max(up - down, 0.0)
+
+
 class BraceClimbParams(Params):
     target: float = Field(100.0, gt=0, description="N, wall load per screw the brace regulates to")
     regulate: Literal["mean", "min"] = Field("mean", description="which screw load the amplitude follows")
@@ -53,15 +89,19 @@ class BraceClimbParams(Params):
     amplitude_min: float = Field(0.0, description="rad")
     amplitude_max: float = Field(1.2, description="rad, a brace never bends further")
     pattern: dict[str, float] = Field(default_factory=lambda: {"bend_*": 1.0},
-                                      description="rad per unit amplitude, by bend joint name/pattern (unnamed: 0)")
+                                      description="rad per unit amplitude, by bend/twist joint name/pattern (unnamed: 0)")
     base: list[float] = Field(default_factory=list, description="rad, set-points at A = 0, every DOF joint "
                               "in URDF order (empty: 0; screws ignored)")
     torque_pattern: dict[str, float] = Field(default_factory=dict,
                                              description="N·m per unit amplitude, by joint name/pattern")
     twist: float = Field(0.0, description="rad, every twist joint")
+    load_screws: list[int] = Field(default_factory=list, description="indices into ``loads`` of the screws the brace "
+                                   "presses on a wall (empty: all; e.g. [0, 3] for a strut whose middle is free)")
     lost_fraction: float = Field(0.2, ge=0, lt=1, description="a screw below this share of the target is off the wall")
     climb_start: float = Field(float("inf"), description="s, screws start turning")
     speed: float = Field(0.0, description="rad/s, climb speed (negative: descend)")
+    climb_stop: float = Field(float("inf"), description="s, screws ramp down and brake again")
+    spin_up: float = Field(0.0, ge=0, description="s, the screws' speed ramps linearly over this time (up and down)")
     climb_signs: dict[str, float] = Field(default_factory=lambda: {"screw_*": 1.0},
                                           description="per screw joint/pattern factor on the speed")
 
@@ -84,13 +124,18 @@ class BraceClimb(Component[BraceClimbParams]):
         p, names = self.p, list(self.robot.joints)
         if self.rate is None:
             raise ValueError(f"{self.name}: brace_climb is a sampled controller: give it `rate: HZ`")
+        if any(i < 0 for i in p.load_screws) or len(set(p.load_screws)) != len(p.load_screws):
+            raise ValueError(f"{self.name}: load_screws must be distinct indices >= 0 into loads, got {p.load_screws}")
+        if p.climb_stop < float("inf") and not p.climb_start < p.climb_stop:
+            raise ValueError(f"{self.name}: need climb_start < climb_stop, got {p.climb_start} and {p.climb_stop}")
         if not p.amplitude_min <= p.amplitude0 <= p.amplitude_max:
             raise ValueError(f"{self.name}: need amplitude_min <= amplitude0 <= amplitude_max")
         finite_or_raise(p.pattern, f"{self.name}: pattern")
         finite_or_raise(p.climb_signs, f"{self.name}: climb_signs")
         kinds = np.array(self.robot.joint_kinds)
         self._bend, self._twist, self._screw = kinds == "bend", kinds == "twist", kinds == "screw"
-        self._pattern = np.array(per_joint(names, p.pattern, f"{self.name}: pattern", 0.0), float) * self._bend
+        shaped = self._bend | self._twist   # a helix brace widens by untwisting (radius κ/(κ² + τ²))
+        self._pattern = np.array(per_joint(names, p.pattern, f"{self.name}: pattern", 0.0), float) * shaped
         nj = self.robot.nj
         if p.base and len(p.base) != nj:
             raise ValueError(f"{self.name}: base has {len(p.base)} values, the robot has {nj} DOF joints")
@@ -107,9 +152,10 @@ class BraceClimb(Component[BraceClimbParams]):
     def output(self, t, x, u, y):
         y.setpoint[:] = self._base + x[A] * self._pattern + self.p.twist * self._twist
         y.tau_ff[:] = x[A] * self._tau
-        if x[PHASE]:
-            s = float(u.climb_speed[0])
-            y.setpoint[self._screw] = (s if s == s else self.p.speed) * self._signs[self._screw]
+        if x[PHASE] == 1.0:
+            s, p = float(u.climb_speed[0]), self.p
+            r = drive_ramp(t, p.climb_start, p.climb_stop, p.spin_up) if p.spin_up > 0 else 1.0  # steps: the phase
+            y.setpoint[self._screw] = r * (s if s == s else p.speed) * self._signs[self._screw]
         y.amplitude[0], y.phase[0], y.load[0] = x[A], x[PHASE], x[LOAD]
 
     def update(self, t, xd, u):
@@ -117,9 +163,14 @@ class BraceClimb(Component[BraceClimbParams]):
         F = float(u.target_force[0])
         F = F if F == F and F > 0 else p.target
         loads = np.asarray(u.loads, float).ravel()
+        if p.load_screws:
+            if max(p.load_screws) >= loads.size:
+                raise ValueError(f"{self.name}: load_screws {p.load_screws} index past the {loads.size} loads wired in")
+            loads = loads[p.load_screws]
         lost = bool((loads < p.lost_fraction * F).any())
         L = float(loads.min() if (p.regulate == "min" or lost) else loads.mean()) if loads.size else 0.0
         rate = min(max(p.gain * (F - L) / F, -p.max_rate), p.max_rate)
         xd[A] = min(max(xd[A] + T * rate, p.amplitude_min), p.amplitude_max)
         xd[LOAD] = L
-        xd[PHASE] = float(t >= p.climb_start)
+        end = p.climb_stop + p.spin_up
+        xd[PHASE] = 0.0 if t < p.climb_start else (1.0 if t < end else 2.0)

@@ -12,9 +12,19 @@ joint_setpoints: constant screw speeds and locked bend/twist joints (paper 4.2):
     other joints: hold[j] (rad, default 0: straight; pass the multibody's q0 to hold the initial shape)
     setpoints:   explicit values by name/pattern, applied last
 serpenoid_gait: a travelling sine wave over ``wave_joints`` (index i along the body, tail first):
-    θ_i(t) = offset + amplitude · sin(2π f t − 2π i / wavelength + phase)
+    θ_i(t) = offset + amplitude · sin(ψ(t) − 2π i / wavelength + phase),   dψ/dt = 2π f · direction
+    ψ(t) = 2π f_p d_p t + δ(t): f_p, d_p the params, δ the gait's continuous state, dδ/dt = dψ/dt − 2π f_p d_p
+    (δ = 0 while nothing is commanded: the wave is exactly 2π f t).
     "undulation" is that wave; "sidewinding" adds a second wave on ``second_joints``
     shifted by ``second_phase`` (π/2 classically). Other joints as joint_setpoints.
+    Because ψ is integrated, a frequency changed during the run
+    (input ``frequency``) changes the speed of the wave without a jump in the joints.
+
+    Optional inputs (shape (1,), for a command source such as ros2_gait_commands): ``amplitude``
+    (rad; sidewinding scales both waves by amplitude / the amplitude param), ``frequency`` (Hz, >= 0),
+    ``wavelength`` (joints, > 0), ``direction`` (+1 or −1: which way the wave travels). NaN or
+    unconnected: the parameter. A non-finite or out-of-range value is treated as NaN (the command
+    source validates and logs).
 """
 
 from __future__ import annotations
@@ -26,7 +36,7 @@ import numpy as np
 from pydantic import Field
 
 from snakesim.components.multibody.robot_model import RobotModel
-from snakesim.framework import Component, Output, Params, Uses
+from snakesim.framework import Component, ContinuousState, Input, Output, Params, Uses
 
 from .joint_selection import finite_or_raise, match, per_joint
 
@@ -87,18 +97,40 @@ class SerpenoidParams(JointSetpointsParams):
     frequency: float = Field(0.2, ge=0, description="Hz")
     wavelength: float = Field(4.0, gt=0, description="spatial period, in joints along the wave")
     phase: float = Field(0.0, description="rad")
+    direction: Literal[1, -1] = Field(1, description="+1 or −1: which way the wave travels along the body")
     offset: float = Field(0.0, description="rad")
     second_joints: str = Field("twist_*", description="sidewinding: pattern of the second wave's joints")
     second_amplitude: float = Field(0.2, description="rad")
     second_phase: float = Field(math.pi / 2, description="rad, shift of the second wave")
 
 
+def command(value, default: float, low: float = -math.inf, strict: bool = False) -> float:
+    """A command input's value (shape (1,)) if it is finite and above ``low`` (strictly with ``strict``),
+    else ``default`` (NaN: not commanded; out of range: the command source rejects and logs it)."""
+    v = float(value[0])
+    if math.isfinite(v) and (v > low if strict else v >= low):
+        return v
+    return default
+
+
+def command_direction(value, default: int) -> int:
+    v = float(value[0])
+    return int(v) if v in (1.0, -1.0) else default
+
+
+_SERPENOID_INPUTS = ("amplitude", "frequency", "wavelength", "direction")
+
+
 class SerpenoidGait(Component[SerpenoidParams]):
     type_name = "serpenoid_gait"
     Params = SerpenoidParams
     robot = Uses(RobotModel)
-    setpoint = Output(shape=_nj, unit=None, feedthrough=(), names=_joints)
-    rate = Output(shape=_nj, unit="rad/s", feedthrough=(), names=_joints)
+    amplitude = Input(shape=(1,), unit="rad", default=np.nan)
+    frequency = Input(shape=(1,), unit="Hz", default=np.nan)
+    wavelength = Input(shape=(1,), unit="1", default=np.nan)
+    direction = Input(shape=(1,), unit="1", default=np.nan)
+    setpoint = Output(shape=_nj, unit=None, feedthrough=_SERPENOID_INPUTS, names=_joints)
+    rate = Output(shape=_nj, unit="rad/s", feedthrough=_SERPENOID_INPUTS, names=_joints)
 
     def setup(self):
         p, names = self.p, self.robot.joints
@@ -110,14 +142,35 @@ class SerpenoidGait(Component[SerpenoidParams]):
             amp.append(p.second_amplitude)
             ph.append(p.phase + p.second_phase)
         self._idx = np.concatenate(idx)
-        # spatial phase per wave joint: its position along its own wave
-        self._k = np.concatenate([-2.0 * np.pi * np.arange(i.size) / p.wavelength + f for i, f in zip(idx, ph)])
+        # per wave joint: its index along its own wave and its wave's phase (the spatial phase is
+        # −2π index / wavelength + that, recomputed when the wavelength is commanded)
+        self._i = np.concatenate([np.arange(i.size, dtype=float) for i in idx])
+        self._ph = np.concatenate([np.full(i.size, f) for i, f in zip(idx, ph)])
         self._amp = np.concatenate([np.full(i.size, a) for i, a in zip(idx, amp)])
-        self._w = 2.0 * np.pi * p.frequency
+        self._main = np.arange(self._idx.size) < idx[0].size
+
+    def continuous_state(self):
+        return ContinuousState(np.zeros(1), names=("phase_shift",))
+
+    def _omega(self, u) -> float:
+        """rad/s, dψ/dt: 2π f · direction, commanded or the params'."""
+        p = self.p
+        return 2.0 * np.pi * command(u.frequency, p.frequency, 0.0) * command_direction(u.direction, p.direction)
 
     def output(self, t, x, u, y):
-        arg = self._w * t + self._k
+        p = self.p
+        lam = command(u.wavelength, p.wavelength, 0.0, strict=True)
+        a = command(u.amplitude, p.amplitude, 0.0)
+        if a == p.amplitude:
+            amp = self._amp
+        else:       # the main wave at a, the second scaled alike (kept when the param is 0)
+            amp = np.where(self._main, a, self._amp * (a / p.amplitude if p.amplitude else 1.0))
+        w = self._omega(u)
+        arg = 2.0 * np.pi * p.frequency * p.direction * t + x[0] - 2.0 * np.pi * self._i / lam + self._ph
         y.setpoint[:] = self._base
-        y.setpoint[self._idx] = self.p.offset + self._amp * np.sin(arg)
+        y.setpoint[self._idx] = p.offset + amp * np.sin(arg)
         y.rate[:] = 0.0
-        y.rate[self._idx] = self._amp * self._w * np.cos(arg)
+        y.rate[self._idx] = amp * w * np.cos(arg)
+
+    def derivative(self, t, x, u, dx):
+        dx[0] = self._omega(u) - 2.0 * np.pi * self.p.frequency * self.p.direction

@@ -4,7 +4,10 @@ A chain whose bend joints alternate pitch (axis y of the joint frame) and yaw (a
 bends in any plane through its axis by splitting each pair's bend between the two
 families. Index k = 0, 1, ... counts the joints of each family from the tail:
 
-    α_k(t)     = phase + k·φ + d·ω·max(0, t − t_start)          rad   (ω = 2π f, d = direction = ±1)
+    α_k(t)     = phase + k·φ + ψ(t)                               rad
+    dψ/dt      = d·ω for t >= t_start, else 0                      (ω = 2π f, d = direction = ±1)
+    ψ(t)       = d_p ω_p max(0, t − t_start) + δ(t)                 (δ: the state, dδ/dt = dψ/dt − d_p ω_p:
+                                                                     0 while nothing is commanded)
     θ_pitch,k  = A sin α_k                                        rad
     θ_yaw,k    = A cos α_k                                        rad
     rates      dθ_pitch,k/dt = d ω A cos α_k,  dθ_yaw,k/dt = −d ω A sin α_k   (0 before t_start)
@@ -29,7 +32,28 @@ cycle (the gait's expected advance; slip takes from it).
 
 Other joints (not in ``joints``, or neither pitch nor yaw) follow joint_setpoints (hold, setpoints).
 
+World reference (``reference: world``, input ``link_rotations`` wired from the multibody; on a robot,
+each module's IMU): open loop, a wall that holds the ring lets it warp out of its plane instead of
+rolling (mini-eels-pipe-climb: within 0.3 s). Instead each pair k bends about the world's ``up`` as
+measured in the link after its first joint, φ_k = atan2(up·y_k, up·z_k) (a level ring whatever the
+body's roll), led towards the rolling phase:
+
+    α_k = φ_k + d·clip(d·wrap(α(t) − φ_0), 0, lead)        (α(t) = phase + ψ(t) as above, d its direction)
+
+The lead (rad) is the rolling torque (≈ kp·A·lead per joint); a body ahead of α(t) holds level and
+never rolls back; a body more than π/2 behind rolls on at the full lead. The roll then follows α(t),
+so ``frequency`` still sets the speed (2π r_s f on a wall without slip) and a command changes it.
+Before t_start: α_k = φ_k (held level).
+
+Commands (optional inputs, shape (1,), e.g. from ros2_gait_commands; NaN or unconnected: the
+param; a non-finite or out-of-range value: the param): ``amplitude`` (rad, A), ``frequency`` (Hz),
+``phase_step`` (rad, φ), ``direction`` (±1). The rolling phase ψ is integrated (its departure from the params' δ
+is the gait's continuous state), so a frequency change moves no joint by a jump.
+
 uses robot: RobotModel (the multibody's): joint names, axes, spacing and limits
+in   link_rotations[nl,3,3] (optional: the world reference),
+     amplitude[1] rad, frequency[1] Hz, phase_step[1] rad,
+     direction[1] (optional commands)
 out  setpoint[nj] rad, rate[nj] rad/s   (for joint_pid's setpoint and rate_ref)
 """
 
@@ -41,10 +65,10 @@ from typing import Literal
 import numpy as np
 from pydantic import Field, model_validator
 
-from snakesim.framework import Component, Output, Params, Uses
+from snakesim.framework import Component, ContinuousState, Input, Output, Params, Uses
 from snakesim.components.multibody.robot_model import RobotModel
 
-from .gaits import JointSetpointsParams, _joints, _nj, constant_setpoints
+from .gaits import JointSetpointsParams, _joints, _nj, command, command_direction, constant_setpoints
 from .joint_selection import match
 
 
@@ -66,6 +90,11 @@ class HelicalGaitParams(JointSetpointsParams):
     phase: float = Field(0.0, description="rad, α at the tail at t_start")
     t_start: float = Field(0.0, ge=0, description="s, the rolling starts here (the shape is held before)")
     limit_margin: float = Field(0.05, ge=0, description="rad kept below the URDF joint limits")
+    reference: Literal["body", "world"] = Field("body", description="body: α_k(t) as above; world: each pair's "
+                                                "bend plane about world 'up', led towards α_0(t) (input link_rotations)")
+    lead: float = Field(0.3, ge=0, lt=math.pi / 2, description="rad, world reference: the largest lead of the bend "
+                                                               "plane on the measured one (the rolling torque)")
+    up: tuple[float, float, float] = Field((0.0, 0.0, 1.0), description="world reference: the up direction")
 
     @model_validator(mode="after")
     def _one_shape(self):
@@ -115,12 +144,20 @@ def helix_amplitude(radius: float, pitch: float, spacing: float) -> tuple[float,
     return 2.0 * math.asin(spacing * kappa), 2.0 * spacing * tau
 
 
+_HELIX_INPUTS = ("link_rotations", "amplitude", "frequency", "phase_step", "direction")
+
+
 class HelicalGait(Component[HelicalGaitParams]):
     type_name = "helical_gait"
     Params = HelicalGaitParams
     robot = Uses(RobotModel)
-    setpoint = Output(shape=_nj, unit=None, feedthrough=(), names=_joints)
-    rate = Output(shape=_nj, unit="rad/s", feedthrough=(), names=_joints)
+    link_rotations = Input(shape=lambda c: (c.robot.nl, 3, 3), unit="1", default=np.nan)
+    amplitude = Input(shape=(1,), unit="rad", default=np.nan)
+    frequency = Input(shape=(1,), unit="Hz", default=np.nan)
+    phase_step = Input(shape=(1,), unit="rad", default=np.nan)
+    direction = Input(shape=(1,), unit="1", default=np.nan)
+    setpoint = Output(shape=_nj, unit=None, feedthrough=_HELIX_INPUTS, names=_joints)
+    rate = Output(shape=_nj, unit="rad/s", feedthrough=_HELIX_INPUTS, names=_joints)
 
     def setup(self):
         p = self.p
@@ -139,24 +176,71 @@ class HelicalGait(Component[HelicalGaitParams]):
                                  f"{lim:.3f} rad less limit_margin {p.limit_margin:g}; use a larger helix radius "
                                  f"(here ℓ = {self.spacing:.3f} m, R = ℓ/sin(A/2))")
         self.curvature = math.sin(self.amplitude / 2.0) / self.spacing        # 1/m, planar-ring relation
-        self._kp = self.phase_step * np.arange(self._pitch.size)
-        self._ky = self.phase_step * np.arange(self._yaw.size)
+        self._limit = min([self._joint_limit(by_name[self.robot.joints[i]])
+                           for i in np.concatenate([self._pitch, self._yaw])]) - p.limit_margin
         self._w = 2.0 * math.pi * p.frequency * p.direction
+        # world reference: pair k's bend is measured in the frame of the link after its first joint
+        n = min(self._pitch.size, self._yaw.size)
+        self._pairs = n
+        self._first_pitch = bool(self._pitch[0] < self._yaw[0])
+        dof = list(self.robot.tree.dof_joints())
+        self._ref_rows = np.array([self.robot.link_index(dof[min(self._pitch[k], self._yaw[k])].child)
+                                   for k in range(n)])
+        up = np.asarray(p.up, dtype=float)
+        if not np.linalg.norm(up) > 0:
+            raise ValueError(f"{self.name}: up must be a non-zero vector, got {p.up}")
+        self._up = up / np.linalg.norm(up)
 
-    def alpha_time(self, t: float) -> float:
-        return self.p.phase + self._w * max(0.0, t - self.p.t_start)
+    @staticmethod
+    def _joint_limit(j) -> float:
+        return min(abs(j.lower), abs(j.upper)) if j.lower is not None and j.upper is not None else math.inf
+
+    def continuous_state(self):
+        return ContinuousState(np.zeros(1), names=("phase_shift",))
+
+    def _omega(self, t, u) -> float:
+        """rad/s, dψ/dt: d·2π f from t_start on (commanded or the params'), 0 before."""
+        if t < self.p.t_start:
+            return 0.0
+        return 2.0 * math.pi * command(u.frequency, self.p.frequency, 0.0) * command_direction(u.direction,
+                                                                                                self.p.direction)
+
+    def derivative(self, t, x, u, dx):
+        dx[0] = self._omega(t, u) - (self._w if t >= self.p.t_start else 0.0)
 
     def output(self, t, x, u, y):
-        a0 = self.alpha_time(t)
-        wdot = self._w if t >= self.p.t_start else 0.0
+        a0 = self.p.phase + self._w * max(0.0, t - self.p.t_start) + (x[0] if x is not None else 0.0)
+        wdot = self._omega(t, u) if u is not None else (self._w if t >= self.p.t_start else 0.0)
         A = self.amplitude
-        ap, ay = a0 + self._kp, a0 + self._ky
+        a_cmd = command(u.amplitude, A, 0.0) if u is not None else A
+        if a_cmd != A and a_cmd <= self._limit:          # a commanded bend past the joints' limits is ignored
+            A = a_cmd
+        phi = command(u.phase_step, self.phase_step) if u is not None else self.phase_step
+        kp = phi * np.arange(self._pitch.size)
+        ky = phi * np.arange(self._yaw.size)
+        Ap = Ay = A
+        ap, ay = a0 + kp, a0 + ky
+        if self.p.reference == "world" and u is not None and np.isfinite(u.link_rotations[0, 0, 0]):
+            # the bend plane of each pair about world up (a level ring), d·lead ahead: rolls it
+            R = u.link_rotations[self._ref_rows]
+            phi = np.arctan2(R[:, :, 1] @ self._up, R[:, :, 2] @ self._up)
+            # the body's roll (the first pair's) follows α_0(t) by a lead of 0 to `lead` in the rolling
+            # direction d: ahead of α_0 (or at it) it holds level, behind it rolls on; never back
+            e = math.remainder(a0 - phi[0], 2.0 * math.pi)
+            d = 1.0 if wdot >= 0.0 else -1.0
+            if wdot != 0.0 and d * e < -0.5 * math.pi:      # far behind, not ahead: a whole turn late
+                e += d * 2.0 * math.pi
+            alpha = phi + d * min(self.p.lead, max(0.0, d * e))
+            n = self._pairs
+            ap, ay = np.empty(self._pitch.size), np.empty(self._yaw.size)
+            ap[:n], ay[:n] = alpha, alpha
+            ap[n:], ay[n:] = alpha[-1], alpha[-1]
         y.setpoint[:] = self._base
-        y.setpoint[self._pitch] = A * np.sin(ap)
-        y.setpoint[self._yaw] = A * np.cos(ay)
+        y.setpoint[self._pitch] = Ap * np.sin(ap)
+        y.setpoint[self._yaw] = Ay * np.cos(ay)
         y.rate[:] = 0.0
-        y.rate[self._pitch] = A * wdot * np.cos(ap)
-        y.rate[self._yaw] = -A * wdot * np.sin(ay)
+        y.rate[self._pitch] = Ap * wdot * np.cos(ap)
+        y.rate[self._yaw] = -Ay * wdot * np.sin(ay)
 
 
 def ring_centre(robot: RobotModel, amplitude: float, pattern: str = "bend_*") -> tuple[np.ndarray, float]:

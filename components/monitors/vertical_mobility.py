@@ -43,6 +43,7 @@ import numpy as np
 from pydantic import Field
 
 from snakesim.components.control.joint_selection import match
+from snakesim.components.monitors import reference_link
 from snakesim.components.multibody.robot_model import RobotModel
 from snakesim.components.port_roles import LINK_POSES
 from snakesim.framework import Component, Input, Output, Params, Uses
@@ -149,10 +150,7 @@ class VerticalMobilityEvaluation(Component[VerticalMobilityParams]):
         tilt_i = sorted({i for pat in p.tilt_links for i in match(links, pat, f"{self.name}: tilt_links")})
         self._tilt_i = np.array(tilt_i, dtype=np.int64)
         self.tilt_names = tuple(links[i] for i in tilt_i)
-        ref = p.reference_link if p.reference_link is not None else links[0]
-        if ref not in links:
-            raise ValueError(f"{self.name}: reference_link '{ref}' is not a link; links: {', '.join(links)}")
-        self._ref, self.reference_name = links.index(ref), ref
+        self._ref, self.reference_name = reference_link(self, p.reference_link)
 
     def discrete_state(self):
         return np.zeros(NX)

@@ -145,6 +145,13 @@ class RobotModel:
         v = np.array([self.tree.joint_by_name[j].velocity for j in self.joints], dtype=float)
         return np.where(v > 0, v, np.inf)
 
+    def position_limits(self) -> tuple[np.ndarray, np.ndarray]:
+        """(lower, upper) URDF <limit> per DOF joint, rad; ∓inf for continuous joints (no stops)."""
+        lo = np.array([self.tree.joint_by_name[j].lower for j in self.joints], dtype=float)
+        hi = np.array([self.tree.joint_by_name[j].upper for j in self.joints], dtype=float)
+        cont = self.continuous_mask()
+        return np.where(cont, -np.inf, lo), np.where(cont, np.inf, hi)
+
     def cuts(self, patterns) -> tuple[list[str], list[str]]:
         """(joint names, child links) of the cuts named by ``patterns``: joint names, link names (their parent
         joint) or glob patterns of either, in the order given; an error lists the joints."""

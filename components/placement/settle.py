@@ -46,6 +46,11 @@ change gravity brings. ``load_time`` = 0 latches the settled angles and switches
 gravity on at once (fine on a floor; between walls the screws touch with ~0 N at
 the latch and the robot drops ~2 cm before the pre-load builds).
 
+Partial braces (``screws``, default every screw): only the listed screws are pulled, counted
+for ``min_contact_fraction`` and pre-loaded (the others get F = 0 in the self-equilibrated
+solve and no spring). E.g. EELS 1.5 between 0.35 m walls braces on screws 0, 2, 3 only: no
+4-screw C keeps its bodies out of the walls (assemblies/placement-walls-body.yaml).
+
 Not settled by ``time_limit``: the run stops with the worst screw distance and
 the fastest link.
 
@@ -145,6 +150,8 @@ class SettleParams(Params):
     load_time: float = Field(0.0, ge=0, description="s from the latch to gravity on (pre-load builds up meanwhile)")
     drive_delay: float = Field(0.0, ge=0, description="s from gravity on to adding the drive input to the set-points")
     rings: int = Field(3, ge=1, description="sample rings per screw (as screw_sdf_contact)")
+    screws: list[int] | None = Field(None, description="screw indices (design order) pulled, counted and pre-loaded; "
+                                                      "null: every screw")
     per_ring: int = Field(12, ge=1, description="samples per ring")
 
 
@@ -203,7 +210,16 @@ class Settle(Component[SettleParams]):
         beyond = [set(tree.subtree(j.child)) for j in jts]
         self._distal = np.array([[links[r] in b for r in lay.parent_row] for b in beyond], dtype=float)
         self._T = 1.0 / self.rate
-        self._need = int(np.ceil(p.min_contact_fraction * lay.ns - 1e-9))
+        if p.screws is None:
+            self._use = np.ones(lay.ns, dtype=bool)
+        else:
+            bad = [s for s in p.screws if not 0 <= s < lay.ns]
+            if bad or not p.screws:
+                raise ValueError(f"{self.name}: params.screws = {p.screws}: give screw indices 0..{lay.ns - 1} "
+                                 f"({', '.join(lay.names)}), at least one")
+            self._use = np.zeros(lay.ns, dtype=bool)
+            self._use[p.screws] = True
+        self._need = int(np.ceil(p.min_contact_fraction * self._use.sum() - 1e-9))
 
     def make_cache(self, x, u, y):
         """What output() saw (for calc_attraction at the same inputs) and the latched pre-load."""
@@ -278,9 +294,9 @@ class Settle(Component[SettleParams]):
         # ±y and the contact points lie within ~1 mm of one plane x = const, so the moment about the
         # normal is ~1e-3 L per newton; imposing it exactly would trade most of the pre-load for a
         # few mN·m that friction carries anyway.
-        c = pts.mean(axis=0)
-        L = max(float(np.sqrt(((pts - c) ** 2).sum(axis=1).mean())), 1e-9)
-        A = np.vstack([n.T, np.cross(pts - c, n).T / L])                   # (6, ns), both rows in N per N
+        c = pts[self._use].mean(axis=0)
+        L = max(float(np.sqrt(((pts[self._use] - c) ** 2).sum(axis=1).mean())), 1e-9)
+        A = np.vstack([n.T, np.cross(pts - c, n).T / L]) * self._use        # (6, ns), both rows in N per N
         _, S, Vt = np.linalg.svd(A, full_matrices=False)
         C = Vt[S > WEAK_ARM * S[0]]                                         # the imposed directions
         from scipy.optimize import lsq_linear
@@ -288,7 +304,8 @@ class Settle(Component[SettleParams]):
         w = 1e3                                             # equality by a heavy penalty, F ≥ 0 by bounds
         M = np.vstack([np.eye(self._ns), w * C])
         rhs = np.concatenate([np.full(self._ns, self.p.preload), np.zeros(len(C))])
-        F = lsq_linear(M, rhs, bounds=(0.0, np.inf)).x
+        F = lsq_linear(M, rhs, bounds=(0.0, np.where(self._use, np.inf, 1e-12))).x
+        F[~self._use] = 0.0                                 # screws left out of the brace carry no pre-load
         f = -F[:, None] * n                                                 # (ns, 3) into the terrain
         Rj = Rotation.from_quat(poses[self._jrow, 3:]).as_matrix()
         axis = np.einsum("kij,kj->ki", Rj, self._jaxis)                    # (nj, 3) world
@@ -329,7 +346,7 @@ class Settle(Component[SettleParams]):
             return
         y.tau_ff[:] = 0.0
         p = self.p
-        f = -p.k_attract * np.maximum(phi, 0.0)[:, None] * n
+        f = -p.k_attract * (np.maximum(phi, 0.0) * self._use)[:, None] * n
         arm = pts - u.link_poses[rows, :3]
         np.add.at(W, (rows, slice(0, 3)), f)
         np.add.at(W, (rows, slice(3, 6)), np.cross(arm, f))
@@ -347,7 +364,7 @@ class Settle(Component[SettleParams]):
         if c.terrain is not u.terrain or not np.array_equal(c.poses, u.link_poses):
             nearest = self._nearest(u.link_poses, u.terrain)          # output() saw other inputs
         phi, n, pts, _ = nearest
-        pulled = phi > 0.0
+        pulled = (phi > 0.0) & self._use
         y.attraction = AttractionSet(pts[pulled].copy(), -self.p.k_attract * phi[pulled, None] * n[pulled])
 
     def update(self, t, xd, u):
@@ -362,7 +379,7 @@ class Settle(Component[SettleParams]):
             return
         phi, _, _, _ = self._nearest(u.link_poses, u.terrain)
         speed = self._speed(u.link_velocities)
-        touching = int((phi <= p.contact_band).sum())
+        touching = int(((phi <= p.contact_band) & self._use).sum())
         quiet = touching >= self._need and speed <= p.max_speed
         if not quiet:
             xd[2] = -1.0
@@ -375,9 +392,9 @@ class Settle(Component[SettleParams]):
             xd[0], xd[1] = (SettlePhase.HOLDING if p.load_time <= 0.0 else SettlePhase.LOADING), t
             return
         if t >= p.time_limit:
-            worst = int(np.argmax(phi))
-            self.stop(f"placement did not settle within time_limit {p.time_limit:g} s: {touching}/{self._ns} "
-                      f"screws within contact_band {p.contact_band:g} m (need {self._need}; farthest "
+            worst = int(np.argmax(np.where(self._use, phi, -np.inf)))
+            self.stop(f"placement did not settle within time_limit {p.time_limit:g} s: "
+                      f"{touching}/{int(self._use.sum())} screws within contact_band {p.contact_band:g} m (need {self._need}; farthest "
                       f"{self.screws.names[worst]} at {phi[worst]:.4f} m), fastest link {speed:.4f} m/s "
                       f"(max_speed {p.max_speed:g}); raise time_limit or k_attract, or improve the shape guess")
 

@@ -88,6 +88,7 @@ def attach_ros2(resolved: Resolved, registry=None, params: dict | None = None) -
     both = {**{k: pub[k] for k in SHARED if k in pub}, **shared}
     attach_commands(resolved, registry, both)
     attach_tether_commands(resolved, registry, both)
+    attach_gait_commands(resolved, registry, both)
     attach_sensor_bridge(resolved, registry, both)
     attach_sim_control(resolved, {**both, "world_frame": pub.get("world_frame", "world")}, registry)
     return name
@@ -152,6 +153,42 @@ def attach_tether_commands(resolved: Resolved, registry=None, params: dict | Non
         resolved.components[name] = ComponentSpec(type=TETHER_COMMANDS, rate=rate,
                                                   params={**(params or {}), "tethers": len(prm.tethers)})
         resolved.connections.append((f"{name}.attached", f"{comp}.attached", "--ros2"))
+        resolved.where[name] = "--ros2"
+        return name
+    return None
+
+
+GAIT_COMMANDS = "ros2_gait_commands"
+
+
+def attach_gait_commands(resolved: Resolved, registry=None, params: dict | None = None) -> str | None:
+    """Add (once) a ``ros2_gait_commands`` source (/gait/parameters, :mod:`.gait_commands`) for the first
+    serpenoid_gait or helical_gait with a free command input, wired into each free one of amplitude,
+    frequency, wavelength, phase_step, direction; update its params. Its name, or None when there is none."""
+    from snakesim.components.control.gaits import SerpenoidGait
+    from snakesim.components.control.helical_gait import HelicalGait
+    from snakesim.framework.registry import default_registry
+
+    from .gait_commands import PARAMETERS
+
+    existing = _existing(resolved, GAIT_COMMANDS)
+    if existing is not None:
+        spec = resolved.components[existing]
+        resolved.components[existing] = spec.model_copy(update={"params": {**spec.params, **(params or {})}})
+        return existing
+    into = {d for _s, d, _w in resolved.connections}
+    for comp, _spec, cls in (registry or default_registry()).classes_in(resolved):
+        if not (isinstance(cls, type) and issubclass(cls, (SerpenoidGait, HelicalGait))):
+            continue
+        free = [k for k in PARAMETERS if k in cls.inputs and f"{comp}.{k}" not in into]
+        if not free:
+            continue
+        name, k = GAIT_COMMANDS, 1
+        while name in resolved.components:
+            name, k = f"{GAIT_COMMANDS}_{k}", k + 1
+        rate = 1.0 / (nearest_period(COMMANDS_RATE, resolved.sim.dt) * resolved.sim.dt)
+        resolved.components[name] = ComponentSpec(type=GAIT_COMMANDS, rate=rate, params=dict(params or {}))
+        resolved.connections.extend((f"{name}.{k}", f"{comp}.{k}", "--ros2") for k in free)
         resolved.where[name] = "--ros2"
         return name
     return None

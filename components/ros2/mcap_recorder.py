@@ -12,7 +12,9 @@ times are simulated time (ns). ``/robot_description`` and ``/tf_static`` (the
 URDF's fixed joints, as the publisher latches them; QoS metadata transient
 local) are written once, on the first tick; ``/sim/real_time_factor``
 (std_msgs/Float64, sim s per wall s over the last window) at its rate, as
-published.
+published. With perception sensors in the scene, ``--ros2-mcap`` also adds a
+``ros2_sensor_mcap`` (.sensor_mcap) that writes the sensor bridge's topics
+(PointCloud2, Image, CameraInfo, the sensor frames on /tf) into the same file.
 
 An interrupted run leaves a readable file: the writer flushes its chunk and
 the file every ``flush_period`` wall seconds (and the summary and footer are
@@ -85,35 +87,75 @@ class McapMessageWriter:
 
 
 class McapFile:
-    """The run's MCAP writer (the publisher's ``run.dds`` slot); :meth:`close` finishes the file once."""
+    """An MCAP file with ROS 2 schemas shared by the run's recorders (``ros2_mcap`` and
+    ``ros2_sensor_mcap`` write one file): :meth:`shared` opens it (replacing an old file) for the
+    first recorder of a path and hands the same writer to the others; each :meth:`release` s its
+    share and the last one finishes the file. One channel per topic, one schema per type."""
+
+    _open: dict[Path, "McapFile"] = {}
 
     def __init__(self, path: Path, chunk_size: int):
         from mcap.writer import CompressionType, Writer
 
         path.parent.mkdir(parents=True, exist_ok=True)
+        self.path = path
         self.stream = open(path, "wb")
         self.writer = Writer(self.stream, chunk_size=chunk_size, compression=CompressionType.ZSTD)
         self.writer.start(profile=PROFILE, library="snakesim ros2_mcap")
         self.schemas: dict[str, int] = {}
+        self.channels: dict[str, int] = {}
+        self.users = 0
+        self.next_flush = 0.0
         self.closed = False
 
+    @classmethod
+    def shared(cls, path: Path, chunk_size: int) -> "McapFile":
+        key = Path(path).resolve()
+        f = cls._open.get(key)
+        if f is None or f.closed:
+            f = cls._open[key] = cls(key, chunk_size)
+        f.users += 1
+        return f
+
     def channel(self, topic: str, ros_name: str, latched: bool = False) -> int:
+        cid = self.channels.get(topic)
+        if cid is not None:
+            return cid
         sid = self.schemas.get(ros_name)
         if sid is None:
             sid = self.schemas[ros_name] = self.writer.register_schema(
                 name=ros_name, encoding="ros2msg", data=schema_text(ros_name).encode())
         meta = {"offered_qos_profiles": _qos_yaml(topic)} if latched or topic in ("/clock", "/tf") else {}
-        return self.writer.register_channel(topic=topic, message_encoding="cdr", schema_id=sid, metadata=meta)
+        cid = self.channels[topic] = self.writer.register_channel(topic=topic, message_encoding="cdr",
+                                                                  schema_id=sid, metadata=meta)
+        return cid
 
     def flush(self) -> None:
         if not self.closed:
             self.writer.flush()
+
+    def flush_every(self, period: float) -> None:
+        """Flush the chunk and the file when ``period`` wall seconds have passed since the last flush
+        (what a killed run loses)."""
+        now = time.monotonic()
+        if now >= self.next_flush:
+            if self.next_flush:
+                self.flush()
+            self.next_flush = now + period
+
+    def release(self) -> None:
+        """One recorder is done with the file; the last one writes the summary and footer."""
+        self.users -= 1
+        if self.users <= 0:
+            self.close()
 
     def close(self) -> None:
         if not self.closed:
             self.closed = True
             self.writer.finish()
             self.stream.close()
+            if McapFile._open.get(self.path) is self:
+                del McapFile._open[self.path]
 
 
 def _qos_yaml(topic: str) -> str:
@@ -139,7 +181,7 @@ class Ros2McapRecorder(Ros2Publisher):
 
     def _open(self, run: "McapRun", u) -> None:
         p = self.p
-        f = McapFile(Path(p.path), p.chunk_size)
+        f = McapFile.shared(Path(p.path), p.chunk_size)
         run.writer = f.writer
         writers = {}
         for key, entry in run.templates.items():
@@ -165,8 +207,8 @@ class Ros2McapRecorder(Ros2Publisher):
             run.rtf = (self.rtf_period, McapMessageWriter(McapChannel(run, cid)), M.Float64)
         self._schedule(run, writers, u)
         run.dds = f
-        run.next_flush = time.monotonic() + p.flush_period
-        run.finalizer = weakref.finalize(run, f.close)       # also at interpreter exit
+        f.flush_every(p.flush_period)
+        run.finalizer = weakref.finalize(run, f.release)     # also at interpreter exit
 
     def update(self, t, xd, u):
         run = u.cache
@@ -174,10 +216,7 @@ class Ros2McapRecorder(Ros2Publisher):
         if run.dds is None:
             self._open(run, u)
         super().update(t, xd, u)
-        now = time.monotonic()
-        if now >= run.next_flush:
-            run.dds.flush()
-            run.next_flush = now + self.p.flush_period
+        run.dds.flush_every(self.p.flush_period)
 
 
 @dataclasses.dataclass(eq=False)
@@ -186,42 +225,54 @@ class McapRun(PublisherRun):
 
     writer: object = None
     now_ns: int = 0
-    next_flush: float = 0.0
 
 
 # -- ``snakesim run --ros2-mcap FILE`` ---------------------------------------------------------------
 MCAP = "ros2_mcap"
+SENSOR_MCAP = "ros2_sensor_mcap"
+#: the DDS endpoint's params a file recorder has no use for
+_DDS_ONLY = ("domain_id", "interface", "node_graph", "ros_distro")
 
 
 def attach_mcap(resolved, path: str) -> str:
     """Add (or update) a ``ros2_mcap`` sink mirroring the ``--ros2`` publisher (added if missing): its params,
-    rate, uses and connections, plus ``path``. Its name."""
-    from .attach import attach_ros2
+    rate, uses and connections, plus ``path``; and, when the scene has perception sensors, a
+    ``ros2_sensor_mcap`` mirroring the sensor bridge into the same file. The publisher recorder's name."""
+    from .attach import SENSOR_BRIDGE, attach_ros2
 
     pub = attach_ros2(resolved)
-    name = next((n for n, s in resolved.components.items()
-                 if s.type == MCAP and resolved.where.get(n) == "--ros2-mcap"), None)
-    if name is None:
-        name, k = MCAP, 1
-        while name in resolved.components:
-            name, k = f"{MCAP}_{k}", k + 1
-    resolved.where[name] = "--ros2-mcap"
-    sync_recorder(resolved, pub, name, path)
+    name = _mirror(resolved, pub, MCAP, path)
+    bridge = next((n for n, s in resolved.components.items() if s.type == SENSOR_BRIDGE), None)
+    if bridge is not None:
+        _mirror(resolved, bridge, SENSOR_MCAP, path)
     return name
 
 
-def sync_recorder(resolved, pub: str, name: str | None = None, path: str | None = None) -> None:
+def sync_recorder(resolved, pub: str) -> None:
     """Make the ``--ros2-mcap`` recorder mirror publisher ``pub`` again (after its params or rate changed)."""
+    name = _recorder(resolved, MCAP)
+    if name is not None:
+        _mirror(resolved, pub, MCAP, resolved.components[name].params["path"])
+
+
+def _recorder(resolved, type_name: str) -> str | None:
+    return next((n for n, s in resolved.components.items()
+                 if s.type == type_name and resolved.where.get(n) == "--ros2-mcap"), None)
+
+
+def _mirror(resolved, source: str, type_name: str, path: str) -> str:
+    """The ``--ros2-mcap`` recorder of ``type_name`` (added if missing) as a copy of the DDS component
+    ``source``: its params (less the DDS endpoint's) and ``path``, its rate and uses, its connections."""
+    name = _recorder(resolved, type_name)
     if name is None:
-        name = next((n for n, s in resolved.components.items()
-                     if s.type == MCAP and resolved.where.get(n) == "--ros2-mcap"), None)
-        if name is None:
-            return
-    spec = resolved.components[pub]
-    if path is None:
-        path = resolved.components[name].params["path"]
-    params = {k: v for k, v in spec.params.items() if k not in ("domain_id", "interface", "node_graph", "ros_distro")}
-    resolved.components[name] = spec.model_copy(update={"type": MCAP, "params": {**params, "path": str(path)}})
+        name, k = type_name, 1
+        while name in resolved.components:
+            name, k = f"{type_name}_{k}", k + 1
+    resolved.where[name] = "--ros2-mcap"
+    spec = resolved.components[source]
+    params = {k: v for k, v in spec.params.items() if k not in _DDS_ONLY}
+    resolved.components[name] = spec.model_copy(update={"type": type_name, "params": {**params, "path": str(path)}})
     resolved.connections[:] = [c for c in resolved.connections if not c[1].startswith(f"{name}.")]
     resolved.connections.extend((s, f"{name}.{d.split('.', 1)[1]}", "--ros2-mcap")
-                                for s, d, _w in list(resolved.connections) if d.startswith(f"{pub}."))
+                                for s, d, _w in list(resolved.connections) if d.startswith(f"{source}."))
+    return name

@@ -119,11 +119,17 @@ class Ros2SensorBridge(Component[Ros2SensorBridgeParams]):
 
         if run.tf is None:
             run.tf = run.dds.writer("/tf", M.TFMessage)
+        run.tf.write(self.frame_message(sample))
+
+    def frame_message(self, sample):
+        """The sensor frame's pose in ``world_frame`` at the sample, as a tf2_msgs/TFMessage."""
+        from . import messages as M
+
         x, y, z, qx, qy, qz, qw = (float(v) for v in sample.pose)
-        run.tf.write(M.TFMessage(transforms=[M.TransformStamped(
+        return M.TFMessage(transforms=[M.TransformStamped(
             header=M.Header(stamp=M.time_msg(max(sample.t, 0.0)), frame_id=self.p.world_frame),
             child_frame_id=sample.frame,
-            transform=M.Transform(translation=M.Vector3(x, y, z), rotation=M.Quaternion(qx, qy, qz, qw)))]))
+            transform=M.Transform(translation=M.Vector3(x, y, z), rotation=M.Quaternion(qx, qy, qz, qw)))])
 
 
 @dataclasses.dataclass(eq=False)

@@ -17,10 +17,12 @@ uses robot: RobotModel (the multibody's), optional: nl when the param is not giv
 
 from __future__ import annotations
 
+import numpy as np
 from pydantic import Field
 
 from snakesim.components.multibody.robot_model import RobotModel
 from snakesim.framework import Component, Input, Output, Params, Uses
+from snakesim.framework.linearization import Elementwise
 
 class WrenchSumParams(Params):
     nl: int | None = Field(None, ge=1, description="number of links; default: the robot's")
@@ -50,6 +52,14 @@ class WrenchSum(Component[WrenchSumParams]):
             raise ValueError(f"{self.name}: no link count: give 'nl', or put it in a scene with a multibody "
                              f"(it takes the robot's)")
         self._terms = [(f"u{i}", s) for i, s in enumerate(self.p.signs)]
+
+    def port_jacobian(self, port, t, x, u, y):
+        """∂y/∂u_i = sign_i·I: passes the inputs' Jacobians on (the contacts' LinkWrenchJacobian reaches the
+        multibody through a sum only so, components/multibody/linearization._link_wrench_terms; without it
+        rosenbrock_w integrates the summed contact forces explicitly, and stiff friction chatters)."""
+        n = 6 * self.nl
+        i = np.arange(n)
+        return Elementwise(n, tuple((name, i, i, np.full(n, float(s))) for name, s in self._terms))
 
     def output(self, t, x, u, y):
         acc = y.y

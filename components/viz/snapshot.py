@@ -16,14 +16,9 @@ import argparse
 
 import numpy as np
 
+from snakesim.components.multibody.pose_quaternions import rotation_matrices
+
 from . import entities as E
-
-
-def _quat_matrix(q) -> np.ndarray:
-    x, y, z, w = q
-    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
 
 
 def scene_at(path, time: float):
@@ -67,7 +62,7 @@ def scene_at(path, time: float):
             tr, q = now(parent, "Transform3D:translation"), now(parent, "Transform3D:quaternion")
             if tr is None:
                 continue
-            v = v @ _quat_matrix(q[0]).T + np.asarray(tr[0])        # one instance per row
+            v = v @ rotation_matrices(q[0]).T + np.asarray(tr[0])        # one instance per row
         meshes.append((entity, v, f, rgba))
     strips = now("/" + E.TETHERS, "LineStrips3D:strips") or []
     points = np.asarray(now("/" + E.CONTACT_POINTS, "Points3D:positions") or np.zeros((0, 3)), dtype=float)

@@ -57,6 +57,7 @@ from pydantic import Field
 
 from snakesim.framework import Component, Input, Output, Params, Uses
 from snakesim.components.materials import EV_A, EV_B, MU, C, K, MaterialPatch, material_table
+from snakesim.components.multibody.pose_quaternions import rotation_matrices
 from snakesim.components.multibody.robot_model import RobotModel
 from snakesim.components.terrain import Terrain
 
@@ -91,15 +92,6 @@ class HullContactParams(Params):
     v_eps: float = Field(1e-3, ge=0, description="m/s")
     regularisation: Literal["sqrt", "linear"] = "sqrt"
     ev_floor: float = Field(EV_FLOOR, gt=0)
-
-
-def quat_to_R(q: np.ndarray) -> np.ndarray:
-    """(n,4) [x, y, z, w] -> (n,3,3)."""
-    x, y, z, w = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
-    return np.stack([
-        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], -1),
-        np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], -1),
-        np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], -1)], 1)
 
 
 class HullContact(Component[HullContactParams]):
@@ -139,7 +131,7 @@ class HullContact(Component[HullContactParams]):
     # -- geometry in the world ---------------------------------------------------------
     def _pieces_world(self, poses):
         g = self.geo
-        R = quat_to_R(poses[:, 3:])
+        R = rotation_matrices(poses[:, 3:])
         Rl = R[g.piece_link]
         Rw = Rl @ g.piece_R
         pw = np.einsum("nij,nj->ni", Rl, g.piece_p) + poses[g.piece_link, :3]
