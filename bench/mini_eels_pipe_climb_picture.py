@@ -16,6 +16,7 @@ from pathlib import Path
 import click
 import numpy as np
 
+from snakesim.components.terrain import load_terrain
 from snakesim.framework.session import load_session
 
 SCENE = "mini-eels-pipe-climb"
@@ -32,8 +33,10 @@ def main(out: Path, duration: float):
     s = load_session(SCENE, sim_overrides={"duration": duration})
     r = s.run()
     ev = r.summary["reports"]["evaluation"]
-    prm = s.resolved.parameters if hasattr(s, "resolved") else {}
-    f, t_roll, r_s, pipe_r = 0.5, 1.0, 0.028, 0.2
+    prm = s.resolved.parameters
+    f, t_roll = float(prm["frequency"]), float(prm["t_roll"])
+    pipe_r = float(load_terrain(prm["terrain"]).radius)
+    r_s = 0.028             # m, no-slip advance per radian of the rolling phase (2π r_s per cycle, see the scene)
     names = s.plan.components["robot"].robot.links
     t = np.asarray(r["t"])
     P = np.asarray(r["robot.link_poses"]).reshape(len(t), len(names), 7)[:, :, :3]

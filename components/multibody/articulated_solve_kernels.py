@@ -34,6 +34,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from snakesim.framework.linear_solve_kernels import lu_factor, lu_solve
+
 from ..kernel_args import record
 from .kernels import FIXED, REVOLUTE, _ensure_kinematics, accelerations, cut_wrenches, forward_kinematics
 
@@ -166,50 +168,6 @@ def prepare(order, jtype, mult, mass, com, inertia, R, p, aw, has_a, atw, apo, I
 
 
 @njit(cache=True)
-def _lu6(a, piv):
-    """In-place LU with partial pivoting of a small dense matrix; False if singular."""
-    n = a.shape[0]
-    for k in range(n):
-        p = k
-        big = abs(a[k, k])
-        for i in range(k + 1, n):
-            if abs(a[i, k]) > big:
-                big, p = abs(a[i, k]), i
-        piv[k] = p
-        if big == 0.0:
-            return False
-        if p != k:
-            for j in range(n):
-                a[k, j], a[p, j] = a[p, j], a[k, j]
-        inv = 1.0 / a[k, k]
-        for i in range(k + 1, n):
-            a[i, k] *= inv
-            f = a[i, k]
-            for j in range(k + 1, n):
-                a[i, j] -= f * a[k, j]
-    return True
-
-
-@njit(cache=True)
-def _lu6_solve(lu, piv, b):
-    n = b.size
-    for i in range(n):
-        p = piv[i]
-        if p != i:
-            b[i], b[p] = b[p], b[i]
-    for i in range(n):
-        s = b[i]
-        for j in range(i):
-            s -= lu[i, j] * b[j]
-        b[i] = s
-    for i in range(n - 1, -1, -1):
-        s = b[i]
-        for j in range(i + 1, n):
-            s -= lu[i, j] * b[j]
-        b[i] = s / lu[i, i]
-
-
-@njit(cache=True)
 def factor(order, parent, jtype, vidx, anc_ptr, anc_dof, R, Iin, AtwO, ApO, has_a, sig, c, d, Ia, Ucol, Urow, D,
            root_lu, root_piv):
     """Eliminate every DOF of W = Σ J_lᵀ (Iin − c AtwO − c² ApO)_l J_l + diag(d) from the leaves
@@ -270,7 +228,7 @@ def factor(order, parent, jtype, vidx, anc_ptr, anc_dof, R, Iin, AtwO, ApO, has_
                         for b in range(3):
                             s += Rr[a, i] * A[3 * bi + a, 3 * bj + b] * Rr[b, j]
                     root_lu[3 * bi + i, 3 * bj + j] = s
-    return _lu6(root_lu, root_piv)
+    return lu_factor(root_lu, root_piv)
 
 
 @njit(cache=True)
@@ -305,7 +263,7 @@ def solve(order, parent, jtype, vidx, anc_ptr, anc_dof, R, sig, Ucol, Urow, D, r
             for a in range(3):
                 s += Rr[a, i] * pb[root, 3 * bi + a]
             y[3 * bi + i] = b[3 * bi + i] - s
-    _lu6_solve(root_lu, root_piv, y)
+    lu_solve(root_lu, root_piv, y)
     for i in range(6):
         b[i] = y[i]
     for bi in range(2):

@@ -36,14 +36,13 @@ out  amplitude[1] rad, frequency[1] Hz, wavelength[1], phase_step[1] rad, direct
 
 from __future__ import annotations
 
-import dataclasses
 import math
-import weakref
 
 import numpy as np
 
 from snakesim.framework import Component, Output
 
+from .command_reader import CommandReaderRun
 from .rejections import Rejected, RejectionLog
 from .transport import DdsEndpoint
 
@@ -78,8 +77,8 @@ class Ros2GaitCommands(Component[Ros2GaitCommandsParams]):
         if self.rate is None:
             raise ValueError(f"{self.name}: ros2_gait_commands needs a rate (Hz): it polls its topic at each tick")
 
-    def make_cache(self, x, u, y) -> "GaitCommandsRun":
-        return GaitCommandsRun()
+    def make_cache(self, x, u, y) -> "CommandReaderRun":
+        return CommandReaderRun()
 
     @staticmethod
     def validate(msg) -> dict[str, float]:
@@ -150,31 +149,8 @@ class Ros2GaitCommands(Component[Ros2GaitCommandsParams]):
             run.applied += 1
             y.applied[0] = run.applied
 
-    def _open(self, run: "GaitCommandsRun") -> None:
+    def _open(self, run: "CommandReaderRun") -> None:
         from . import messages as M
-        from .transport import Ros2Participant
 
         self._type = M.ros_type("rcl_interfaces/msg/ParameterEvent")
-        dds = Ros2Participant(self.p.domain_id, self.p.interface)
-        run.reader = dds.reader(GAIT_TOPIC, self._type)
-        run.dds = dds
-        self.p.announce(dds, "snakesim_gait_commands")              # ros2 node list (:mod:`.node_graph`)
-        run.finalizer = weakref.finalize(run, dds.close)
-
-
-@dataclasses.dataclass(eq=False)
-class GaitCommandsRun:
-    """One run's state (``u.cache``): the DDS reader (opened on the first tick) and counts."""
-
-    started: bool = False
-    dds: object = None
-    reader: object = None
-    rejected: int = 0
-    applied: int = 0
-    log: RejectionLog | None = None
-    finalizer: object = None
-
-    def close(self) -> None:
-        if self.finalizer is not None:
-            self.finalizer()
-        self.finalizer, self.dds, self.reader = None, None, None
+        run.open(self.p, GAIT_TOPIC, self._type, "snakesim_gait_commands")

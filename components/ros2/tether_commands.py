@@ -32,13 +32,13 @@ out  attached[n]   1 attached, 0 released, NaN before any command (the tethers' 
 from __future__ import annotations
 
 import dataclasses
-import weakref
 
 import numpy as np
 from pydantic import Field
 
 from snakesim.framework import Component, Output
 
+from .command_reader import CommandReaderRun
 from .rejections import Rejected, RejectionLog
 from .transport import DdsEndpoint
 
@@ -104,30 +104,13 @@ class Ros2TetherCommands(Component[Ros2TetherCommandsParams]):
 
     def _open(self, run: "TetherCommandsRun") -> None:
         from . import messages as M
-        from .transport import Ros2Participant
 
         self._type = M.UInt8MultiArray
-        dds = Ros2Participant(self.p.domain_id, self.p.interface)
-        run.reader = dds.reader(TETHER_TOPIC, M.UInt8MultiArray)
-        run.dds = dds
-        self.p.announce(dds, "snakesim_tether_commands")              # ros2 node list (:mod:`.node_graph`)
-        run.finalizer = weakref.finalize(run, dds.close)
+        run.open(self.p, TETHER_TOPIC, M.UInt8MultiArray, "snakesim_tether_commands")
 
 
 @dataclasses.dataclass(eq=False)
-class TetherCommandsRun:
-    """One run's state (``u.cache``): the DDS reader (opened on the first tick) and counts."""
+class TetherCommandsRun(CommandReaderRun):
+    """The command reader's state and the last rejection's reason."""
 
-    started: bool = False
-    dds: object = None
-    reader: object = None
-    rejected: int = 0
-    applied: int = 0
     last_reason: str = ""
-    log: RejectionLog | None = None
-    finalizer: object = None
-
-    def close(self) -> None:
-        if self.finalizer is not None:
-            self.finalizer()
-        self.finalizer, self.dds, self.reader = None, None, None

@@ -10,7 +10,6 @@
 from __future__ import annotations
 
 import numpy as np
-import pytest
 
 from snakesim.framework.linearization import Linearization
 from snakesim.framework.session import load_session

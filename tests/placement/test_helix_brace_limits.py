@@ -12,7 +12,6 @@ with EELS 1.5's twist actuators' effort (40 N·m) at the walls scenes' μ = 1.5 
 from __future__ import annotations
 
 import numpy as np
-import pytest
 
 from snakesim.components.placement import SettlePhase
 from snakesim.framework.session import load_session
