@@ -19,8 +19,8 @@ import numpy as np
 
 from snakesim.framework.session import load_session
 
-SCENES = ["walls-brace-climb", "walls-brace-climb-down", "walls-brace-climb-fail", "parallel-walls-climb",
-          "tube-brace-descend"]
+SCENES = ["walls-body-brace", "walls-body-brace-climb", "walls-body-brace-down", "walls-brace-climb",
+          "walls-brace-climb-down", "walls-brace-climb-fail", "parallel-walls-climb", "tube-brace-descend"]
 PICTURES = ["walls-brace-climb", "walls-brace-climb-down", "walls-brace-climb-fail", "tube-brace-descend"]
 
 
