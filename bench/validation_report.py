@@ -104,13 +104,22 @@ def vertical_rows() -> list[dict]:
     return rows
 
 
+def _inside(cl: dict | None) -> str:
+    if cl is None:
+        return "not watched"
+    return ", ".join(f"{k} {1e3 * v:.0f} mm" for k, v in list(cl["inside"].items())[:3]) or "none"
+
+
 def _evaluation_line(row: dict) -> str:
     ev, cl = row["evaluation"], row.get("clearance")
     if not ev:
         return f"| {row['scene']} | — | — | — | — | {row['stop_reason']} | — |"
+    if "contact" not in ev:             # a traverse_evaluation (u-channel-brace-traverse): distance along the path
+        return (f"| {row['scene']} | — | — | {ev.get('distance_m', float('nan')):+.3g} m along the channel, steady "
+                f"{ev.get('steady_speed_m_s') or float('nan'):.3g} m/s | none | {row['stop_reason']} | "
+                f"{_inside(cl)} |")
     c, h, d, f = ev["contact"], ev["hold"], ev["vertical_distance"], ev["failure"]
-    inside = "not watched" if cl is None else "none" if not cl["inside"] else \
-        ", ".join(f"{k} {1e3 * v:.0f} mm" for k, v in list(cl["inside"].items())[:3])
+    inside = _inside(cl)
     tether = f"; tether slack {100 * ev['tether']['slack_fraction']:.0f} %" if "tether" in ev else ""
     return (f"| {row['scene']} | {c['time_s'] if c['made'] else 'never'} | {h['longest_s']:.3g} s "
             f"({'held' if h['achieved'] else 'not held'}) | +{d['up_m']:.3g} / −{d['down_m']:.3g} m | "

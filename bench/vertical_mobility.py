@@ -20,7 +20,8 @@ import numpy as np
 from snakesim.framework.session import load_session
 
 SCENES = ["walls-body-brace", "walls-body-brace-climb", "walls-body-brace-down", "walls-brace-climb",
-          "walls-brace-climb-down", "walls-brace-climb-fail", "parallel-walls-climb", "tube-brace-descend"]
+          "walls-brace-climb-down", "walls-brace-climb-fail", "parallel-walls-climb", "tube-brace-descend",
+          "u-channel-brace-traverse"]
 PICTURES = ["walls-brace-climb", "walls-brace-climb-down", "walls-brace-climb-fail", "tube-brace-descend"]
 
 
