@@ -12,58 +12,29 @@ import numpy as np
 import pytest
 from pydantic import ValidationError
 
-from pydantic import Field
-
-from snakesim.framework import Component, ContinuousState, Output, Params
 from snakesim.framework.integrators.rosenbrock_w import ROS34PW2, RosenbrockW
 from snakesim.framework.linearization import Linearization, Mechanical
-from snakesim.framework.registry import build_registry
 from snakesim.framework.session import load_session
 
 
-class OscillatorParams(Params):
-    omega: float = Field(1.0, gt=0, description="rad/s")
-    x0: float = 1.0
-    v0: float = 0.0
+def _declared(base):
+    """conftest's oscillator (ẍ = −ω² x, declares nothing) declaring its mechanical block: M = 1,
+    ∂Q/∂x = −ω², ∂Q/∂v = 0."""
 
+    class DeclaredOscillator(base):
+        type_name = "test_declared_oscillator"
 
-class Oscillator(Component[OscillatorParams]):
-    """ẍ = −ω² x; energy = ½(v² + ω² x²) per unit mass. Declares no Jacobian."""
+        def mechanical_jacobian(self, t, x, u, y, lin):
+            return Mechanical(M=np.eye(1), Gq=np.array([[-self.p.omega ** 2]]), Gv=np.zeros((1, 1)))
 
-    type_name = "test_w_oscillator"
-    Params = OscillatorParams
-    x = Output(unit="m", feedthrough=())
-    v = Output(unit="m/s", feedthrough=())
-    energy = Output(unit="J", feedthrough=())
-
-    def continuous_state(self):
-        return ContinuousState(np.array([self.p.x0, self.p.v0]), second_order=1, names=("x", "v"))
-
-    def output(self, t, x, u, y):
-        y.x[...] = x[0]
-        y.v[...] = x[1]
-        y.energy[...] = 0.5 * (x[1] ** 2 + self.p.omega ** 2 * x[0] ** 2)
-
-    def derivative(self, t, x, u, dx):
-        dx[0] = x[1]
-        dx[1] = -self.p.omega ** 2 * x[0]
-
-
-class DeclaredOscillator(Oscillator):
-    """The same oscillator declaring its mechanical block: M = 1, ∂Q/∂x = −ω², ∂Q/∂v = 0."""
-
-    type_name = "test_declared_oscillator"
-
-    def mechanical_jacobian(self, t, x, u, y, lin):
-        return Mechanical(M=np.eye(1), Gq=np.array([[-self.p.omega ** 2]]), Gv=np.zeros((1, 1)))
+    return DeclaredOscillator
 
 
 @pytest.fixture(scope="module")
-def reg():
-    r = build_registry(load_entry_points=False)
-    for cls in (Oscillator, DeclaredOscillator):
-        r.add_component(cls)
-    return r
+def reg(registry):
+    """conftest's registry (its oscillator is "test_oscillator") plus the declaring twin."""
+    registry.add_component(_declared(registry.component("test_oscillator")))
+    return registry
 
 
 def oscillator(tmp_path, reg, kind, dt, duration, omega=1.0, params=None):
@@ -87,7 +58,7 @@ def max_error(r, omega):
     return float(np.max(np.hypot(r["osc.x"] - np.cos(omega * t), (r["osc.v"] + omega * np.sin(omega * t)) / omega)))
 
 
-@pytest.mark.parametrize("kind", ["test_w_oscillator", "test_declared_oscillator"])
+@pytest.mark.parametrize("kind", ["test_oscillator", "test_declared_oscillator"])
 @pytest.mark.parametrize("method, order, dts", [("ros34pw2", 3, (0.2, 0.1, 0.05, 0.025)),
                                                 ("ros2", 2, (0.1, 0.05, 0.025, 0.0125))])
 def test_order_does_not_depend_on_the_declared_jacobian(tmp_path, reg, kind, method, order, dts):
@@ -139,7 +110,7 @@ def test_declared_stiffness_is_integrated_implicitly(tmp_path, reg):
     assert r.summary["completed"]
     E = r["osc.energy"]
     assert np.all(np.diff(E) <= 1e-12 * E[0])
-    _, bad = oscillator(tmp_path, reg, "test_w_oscillator", dt, 1.0, omega)
+    _, bad = oscillator(tmp_path, reg, "test_oscillator", dt, 1.0, omega)
     assert not bad.summary["completed"]
 
 
