@@ -11,33 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from snakesim.framework.linearization import Linearization
 from snakesim.framework.session import load_session
 
-
-def _fd_check(session, t):
-    p = session.plan
-    X0 = p.X.copy()
-    p.f(t, p.X)
-    lin = Linearization(p)
-    lin.assemble(t)
-    J = lin.dense()
-    n = p.ndx
-    Jfd = np.zeros((n, n))
-    xs = np.zeros(p.nx)
-    e = np.zeros(n)
-    for j in range(n):
-        col = []
-        for sign in (1.0, -1.0):
-            e[j] = sign * 1e-7
-            p.integrate(X0, e, xs)
-            col.append(p.f(t, xs).copy())
-        e[j] = 0.0
-        Jfd[:, j] = (col[0] - col[1]) / 2e-7
-    p.f(t, X0)
-    robot = next(sl for sl in p.slices if sl.second_order)
-    nv, q0 = robot.second_order, robot.dx.start
-    return J, Jfd, slice(q0, q0 + nv), slice(q0 + nv, q0 + 2 * nv)
+from jacobian_check import analytic_and_fd_jacobian
 
 
 def test_body_jacobian_matches_finite_differences_mid_crawl():
@@ -51,7 +27,7 @@ def test_body_jacobian_matches_finite_differences_mid_crawl():
     s.run()
     contacts = s.plan.caches["contact"]
     assert int(contacts.counts[4]) > 0 and (contacts.distance[:int(contacts.counts[4])] < 0).sum() >= 4
-    J, Jfd, qs, vs = _fd_check(s, 0.4)
+    J, Jfd, qs, vs = analytic_and_fd_jacobian(s.plan, 0.4)
 
     def rel(rows, cols):
         return np.abs(J[rows, cols] - Jfd[rows, cols]).max() / np.abs(Jfd[rows, cols]).max()

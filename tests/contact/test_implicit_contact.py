@@ -18,8 +18,9 @@ import textwrap
 import numpy as np
 import pytest
 
-from snakesim.framework.linearization import Linearization
 from snakesim.framework.session import load_session
+
+from jacobian_check import analytic_and_fd_jacobian
 
 G = 9.81
 
@@ -75,28 +76,8 @@ def test_jacobian_matches_finite_differences_in_the_default_scene():
     s = load_session("surface-screw-traverse", overrides=["robot.modules=2", "settle=0.2"],
                      sim_overrides={"duration": 0.6, "integrator": "rk4", "dt": 5e-4})
     s.run()
-    p = s.plan
-    t = 0.6
-    X0 = p.X.copy()
-    p.f(t, p.X)
-    lin = Linearization(p)
-    lin.assemble(t)
-    J = lin.dense()
-    n = p.ndx
-    Jfd = np.zeros((n, n))
-    xs = np.zeros(p.nx)
-    e = np.zeros(n)
-    for j in range(n):
-        col = []
-        for sign in (1.0, -1.0):
-            e[j] = sign * 1e-7
-            p.integrate(X0, e, xs)
-            col.append(p.f(t, xs).copy())
-        e[j] = 0.0
-        Jfd[:, j] = (col[0] - col[1]) / 2e-7
-    robot = next(sl for sl in p.slices if sl.second_order)
-    nv, q0 = robot.second_order, robot.dx.start
-    qs, vs, pid = slice(q0, q0 + nv), slice(q0 + nv, q0 + 2 * nv), slice(0, q0)
+    J, Jfd, qs, vs = analytic_and_fd_jacobian(s.plan, 0.6)
+    pid = slice(0, qs.start)
 
     def rel(rows, cols):
         return np.abs(J[rows, cols] - Jfd[rows, cols]).max() / np.abs(Jfd[rows, cols]).max()
