@@ -136,17 +136,23 @@ def add_lever_quadratic(r, D, out):
 
 
 @njit(cache=True)
+def _clear_marked(d_twist, d_pose, on_link):
+    """Zero the blocks of the links marked in on_link (the last evaluation's) and unmark them."""
+    for i in range(on_link.size):
+        if on_link[i]:
+            d_twist[i, :, :] = 0.0
+            d_pose[i, :, :] = 0.0
+            on_link[i] = False
+
+
+@njit(cache=True)
 def contact_jacobian_blocks(m, distance, normal, material, owner, point, vel, poses, axis_B, screw_row,
                             parent_row, lead_angle, hand, mats, v_eps, mode, ev_floor, d_twist, d_pose, on_link):
     """Per screw link, Σ over its samples in contact of X_cᵀ ∂F/∂v X_c and X_cᵀ ∂F/∂p_s X_c (about the
     screw link's origin, world axes), from the last evaluation's per-sample results (point = p_c,
     vel = v). Blocks of links marked in on_link are overwritten, others untouched;
     returns the number of links marked."""
-    for i in range(on_link.size):
-        if on_link[i]:
-            d_twist[i, :, :] = 0.0
-            d_pose[i, :, :] = 0.0
-            on_link[i] = False
+    _clear_marked(d_twist, d_pose, on_link)
     Dv = np.empty((3, 3))
     Dp = np.empty((3, 3))
     W = np.empty((3, 3, 3))
@@ -209,11 +215,7 @@ def body_jacobian_blocks(m, distance, normal, material, sample, owner, point, ve
     inside), μ = μ_material · mu_scale, κ = skin_ratio (ev_b = 0: no load dependence). The sample is
     fixed in the link, so its depth moves with it (δp = X_p δ_l). Blocks of links marked in on_link are
     overwritten, others untouched; returns the number of links marked."""
-    for i in range(on_link.size):
-        if on_link[i]:
-            d_twist[i, :, :] = 0.0
-            d_pose[i, :, :] = 0.0
-            on_link[i] = False
+    _clear_marked(d_twist, d_pose, on_link)
     Dv = np.empty((3, 3))
     Dp = np.empty((3, 3))
     W = np.empty((3, 3, 3))
