@@ -41,13 +41,14 @@ def builtin_components() -> tuple:
     from .ros2.mcap_recorder import Ros2McapRecorder
     from .ros2.sensor_mcap import Ros2SensorMcap
     from .ros2.gait_commands import Ros2GaitCommands
+    from .ros2.brace_commands import Ros2BraceCommands
 
     return (Constant, Step, Sine, Gain, Sum, ZeroOrderHold, Pendulum, ViscousDamper, PointMass, SpringDamper,
             PointContact, HullContact, TerrainSource, Multibody, ScrewSdfContact, BodyContact, ScrewDrive,
             JointPid, JointSpringDamper, JointSetpoints, SerpenoidGait, HelicalGait, CsvTrajectory, Schedule, ForceTorqueSensors, FtsWallLoads,
             Imu, Tethers, WrenchSum, MobilityMonitor, VerticalMobilityEvaluation, TraverseEvaluation, TerrainClearance, JointLimits, BraceClimb, RerunSink, PlanarPose, ScrewSchedule, Ros2Publisher,
             Ros2Commands, Ros2SensorBridge, Ros2SimControl, Ros2McapRecorder, Ros2SensorMcap, Ros2TetherCommands,
-            Ros2GaitCommands, *PLACEMENT, *PERCEPTION)
+            Ros2GaitCommands, Ros2BraceCommands, *PLACEMENT, *PERCEPTION)
 
 
 def __getattr__(name):

@@ -15,8 +15,10 @@ are braked until ``climb_start``, turn at the climb speeds until ``climb_stop`` 
     lost      a screw whose load falls below lost_fraction·F* counts as out of contact; L then uses
               the min (recovery: the amplitude rises until every screw is back on a wall)
     set-points  bend/twist j: base_j + A·pattern_j (rad) (twist joints: + twist);
-                screw j: ω_j = r(t)·ω*·climb_sign_j (rad/s, the PID's velocity mode; its integral
-                brakes the screws at ω_j = 0), with the drive ramp
+                screw j: ω_j = r(t)·S·climb_sign_j (rad/s, the PID's velocity mode; its integral
+                brakes the screws at ω_j = 0), S the commanded speed ω* reached at ``speed_slew``
+                (rad/s² per sample; default the drive ramp's slope |ω*|/spin_up: a step change of speed
+                mid-climb unloads the brace while the screws' loops catch up), with the drive ramp
                 r(t) = clip((t − climb_start)/spin_up, 0, 1) − clip((t − climb_stop)/spin_up, 0, 1)
                 (spin_up = 0: steps)
     feed-forward  tau_ff[j] = A·torque_pattern_j (N·m): a pre-load in proportion to the amplitude
@@ -68,7 +70,7 @@ from snakesim.framework import Component, Input, Output, Params, Uses
 
 from .joint_selection import finite_or_raise, per_joint
 
-A, PHASE, LOAD, NX = 0, 1, 2, 3
+A, PHASE, LOAD, SPEED, NX = 0, 1, 2, 3, 4
 
 
 def drive_ramp(t: float, start: float, stop: float, spin_up: float) -> float:
@@ -104,6 +106,8 @@ class BraceClimbParams(Params):
     spin_up: float = Field(0.0, ge=0, description="s, the screws' speed ramps linearly over this time (up and down)")
     climb_signs: dict[str, float] = Field(default_factory=lambda: {"screw_*": 1.0},
                                           description="per screw joint/pattern factor on the speed")
+    speed_slew: float | None = Field(None, gt=0, description="rad/s², how fast a commanded climb_speed is reached "
+                                     "(None: |speed|/spin_up, the drive ramp's own slope; a step if spin_up is 0)")
 
 
 class BraceClimb(Component[BraceClimbParams]):
@@ -143,19 +147,22 @@ class BraceClimb(Component[BraceClimbParams]):
         finite_or_raise(p.torque_pattern, f"{self.name}: torque_pattern")
         self._tau = np.array(per_joint(names, p.torque_pattern, f"{self.name}: torque_pattern", 0.0), float)
         self._signs = np.array(per_joint(names, p.climb_signs, f"{self.name}: climb_signs", 0.0), float) * self._screw
+        ramp = abs(p.speed) / p.spin_up if p.spin_up > 0 and p.speed != 0 else float("inf")
+        self._slew = p.speed_slew if p.speed_slew is not None else ramp
 
     def discrete_state(self):
         x = np.zeros(NX)
         x[A] = self.p.amplitude0
+        x[SPEED] = self.p.speed
         return x
 
     def output(self, t, x, u, y):
         y.setpoint[:] = self._base + x[A] * self._pattern + self.p.twist * self._twist
         y.tau_ff[:] = x[A] * self._tau
         if x[PHASE] == 1.0:
-            s, p = float(u.climb_speed[0]), self.p
+            p = self.p
             r = drive_ramp(t, p.climb_start, p.climb_stop, p.spin_up) if p.spin_up > 0 else 1.0  # steps: the phase
-            y.setpoint[self._screw] = r * (s if s == s else p.speed) * self._signs[self._screw]
+            y.setpoint[self._screw] = r * x[SPEED] * self._signs[self._screw]
         y.amplitude[0], y.phase[0], y.load[0] = x[A], x[PHASE], x[LOAD]
 
     def update(self, t, xd, u):
@@ -172,5 +179,11 @@ class BraceClimb(Component[BraceClimbParams]):
         rate = min(max(p.gain * (F - L) / F, -p.max_rate), p.max_rate)
         xd[A] = min(max(xd[A] + T * rate, p.amplitude_min), p.amplitude_max)
         xd[LOAD] = L
+        s = float(u.climb_speed[0])
+        s = s if s == s else p.speed
+        if self._slew * T == float("inf"):
+            xd[SPEED] = s
+        else:       # a commanded speed is reached at the ramp's slope: a step would unload the brace
+            xd[SPEED] += min(max(s - xd[SPEED], -self._slew * T), self._slew * T)
         end = p.climb_stop + p.spin_up
         xd[PHASE] = 0.0 if t < p.climb_start else (1.0 if t < end else 2.0)

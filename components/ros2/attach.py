@@ -37,6 +37,11 @@ The tether command source (``ros2_tether_commands``, :func:`attach_tether_comman
 scene has a ``tethers`` component (class Tethers) whose ``attached`` input it leaves unconnected:
 ``ros2_tether_commands.attached -> tethers.attached`` (/tethers/attached).
 
+The parameter command sources (:mod:`.parameter_commands`), each added for the first component of its
+kind that leaves one of its inputs unconnected, wired input by input of the same name:
+``ros2_gait_commands`` (/gait/parameters) for a serpenoid_gait or helical_gait,
+``ros2_brace_commands`` (/brace/parameters) for a brace_climb (target_force, climb_speed).
+
 The rule when the scene already drives the PID's set-points (a schedule, a gait, joint_setpoints): plain
 ``--ros2`` leaves the scene's connection alone and does not accept joint commands (the source does
 not subscribe to them, and says so once on the ``snakesim.ros2`` logger); ``--ros2-commands`` hands the
@@ -89,6 +94,7 @@ def attach_ros2(resolved: Resolved, registry=None, params: dict | None = None) -
     attach_commands(resolved, registry, both)
     attach_tether_commands(resolved, registry, both)
     attach_gait_commands(resolved, registry, both)
+    attach_brace_commands(resolved, registry, both)
     attach_sensor_bridge(resolved, registry, both)
     attach_sim_control(resolved, {**both, "world_frame": pub.get("world_frame", "world")}, registry)
     return name
@@ -159,6 +165,7 @@ def attach_tether_commands(resolved: Resolved, registry=None, params: dict | Non
 
 
 GAIT_COMMANDS = "ros2_gait_commands"
+BRACE_COMMANDS = "ros2_brace_commands"
 
 
 def attach_gait_commands(resolved: Resolved, registry=None, params: dict | None = None) -> str | None:
@@ -167,27 +174,47 @@ def attach_gait_commands(resolved: Resolved, registry=None, params: dict | None 
     frequency, wavelength, phase_step, direction; update its params. Its name, or None when there is none."""
     from snakesim.components.control.gaits import SerpenoidGait
     from snakesim.components.control.helical_gait import HelicalGait
+
+    from .gait_commands import Ros2GaitCommands
+
+    return _attach_parameter_commands(resolved, registry, params, Ros2GaitCommands, (SerpenoidGait, HelicalGait))
+
+
+def attach_brace_commands(resolved: Resolved, registry=None, params: dict | None = None) -> str | None:
+    """Add (once) a ``ros2_brace_commands`` source (/brace/parameters, :mod:`.brace_commands`) for the first
+    brace_climb with a free ``target_force`` or ``climb_speed`` input, wired into each free one; update its
+    params. Its name, or None when there is none."""
+    from snakesim.components.control.brace_climb import BraceClimb
+
+    from .brace_commands import Ros2BraceCommands
+
+    return _attach_parameter_commands(resolved, registry, params, Ros2BraceCommands, (BraceClimb,))
+
+
+def _attach_parameter_commands(resolved: Resolved, registry, params: dict | None, source, targets) -> str | None:
+    """Add (once) the ParameterEvent command source class ``source`` for the first component of a class in
+    ``targets`` that leaves one of the source's parameters free as an input of the same name, wired into each
+    free one; update its params. Its name, or None when there is none."""
     from snakesim.framework.registry import default_registry
 
-    from .gait_commands import PARAMETERS
-
-    existing = _existing(resolved, GAIT_COMMANDS)
+    type_name = source.type_name
+    existing = _existing(resolved, type_name)
     if existing is not None:
         spec = resolved.components[existing]
         resolved.components[existing] = spec.model_copy(update={"params": {**spec.params, **(params or {})}})
         return existing
     into = {d for _s, d, _w in resolved.connections}
     for comp, _spec, cls in (registry or default_registry()).classes_in(resolved):
-        if not (isinstance(cls, type) and issubclass(cls, (SerpenoidGait, HelicalGait))):
+        if not (isinstance(cls, type) and issubclass(cls, targets)):
             continue
-        free = [k for k in PARAMETERS if k in cls.inputs and f"{comp}.{k}" not in into]
+        free = [k for k in source.PARAMETERS if k in cls.inputs and f"{comp}.{k}" not in into]
         if not free:
             continue
-        name, k = GAIT_COMMANDS, 1
+        name, k = type_name, 1
         while name in resolved.components:
-            name, k = f"{GAIT_COMMANDS}_{k}", k + 1
+            name, k = f"{type_name}_{k}", k + 1
         rate = 1.0 / (nearest_period(COMMANDS_RATE, resolved.sim.dt) * resolved.sim.dt)
-        resolved.components[name] = ComponentSpec(type=GAIT_COMMANDS, rate=rate, params=dict(params or {}))
+        resolved.components[name] = ComponentSpec(type=type_name, rate=rate, params=dict(params or {}))
         resolved.connections.extend((f"{name}.{k}", f"{comp}.{k}", "--ros2") for k in free)
         resolved.where[name] = "--ros2"
         return name

@@ -53,11 +53,32 @@ def test_screws_braked_then_climb_at_the_signed_speed_and_the_input_overrides():
     h.update(1.0)
     np.testing.assert_allclose(h.outputs()["setpoint"][screws], [-2.0, 2.0, 2.0, 2.0])
     h.inputs.climb_speed = np.array([-1.0])                                    # e.g. a ROS 2 command: descend
-    np.testing.assert_allclose(h.outputs()["setpoint"][screws], [1.0, -1.0, -1.0, -1.0])
     h.inputs.target_force = np.array([200.0])
     a0 = h.outputs()["amplitude"][0]
-    h.update(1.01)
+    h.update(1.01)                                                             # spin_up 0: a step, at the sample
+    np.testing.assert_allclose(h.outputs()["setpoint"][screws], [1.0, -1.0, -1.0, -1.0])
     assert h.outputs()["amplitude"][0] > a0                                    # 100 N is below the new target
+
+
+def test_a_commanded_speed_is_reached_at_the_slew_rate():
+    # spin_up 0.5 s to 2 rad/s: the default slew is 4 rad/s², 0.04 rad/s per 10 ms sample
+    h = _ctrl(spin_up=0.5)
+    h.inputs.loads = np.full(4, 100.0)
+    screws = [i for i, k in enumerate(ROBOT.joint_kinds) if k == "screw"]
+    sign = np.array([-1.0, 1.0, 1.0, 1.0])
+    h.update(2.0)
+    np.testing.assert_allclose(h.outputs(2.0)["setpoint"][screws], 2.0 * sign)
+    h.inputs.climb_speed = np.array([1.0])
+    for k in range(1, 30):
+        h.update(2.0 + 0.01 * k)
+        out = h.outputs(2.0 + 0.01 * k)
+        np.testing.assert_allclose(out["setpoint"][screws], max(2.0 - 0.04 * k, 1.0) * sign, atol=1e-12)
+    h = _ctrl(spin_up=0.5, speed_slew=50.0)                                    # explicit: 0.5 rad/s per sample
+    h.inputs.loads = np.full(4, 100.0)
+    h.update(2.0)
+    h.inputs.climb_speed = np.array([1.0])
+    h.update(2.01)
+    np.testing.assert_allclose(h.outputs(2.01)["setpoint"][screws], 1.5 * sign)
 
 
 def test_drive_ramp_up_hold_down_and_phase():

@@ -24,7 +24,7 @@ DURATION = 4.0
 
 MALFORMED = [
     ({"changed_parameters": [{"name": "speed", "value": {"type": 3, "double_value": 1.0}}]},
-     "/gait/parameters: changed_parameters[0].name = 'speed' is not a gait parameter"),
+     "/gait/parameters: changed_parameters[0].name = 'speed' is not a parameter here"),
     ({"changed_parameters": [{"name": "frequency", "value": {"type": 3, "double_value": -1.0}}]},
      "/gait/parameters: changed_parameters[0].value (frequency) = -1 Hz is out of range (>= 0)"),
     ({"changed_parameters": [{"name": "frequency", "value": {"type": 4, "string_value": "fast"}}]},
