@@ -5,21 +5,16 @@ tilt; components/control/brace_climb.py), so its climb rate halves, then doubles
 are rejected, naming the field, and change nothing. (The target load's path is the same port wiring and
 validation: test_attach_... and test_validate_...; tests/control/test_brace_climb.py checks its effect.)"""
 
-import json
 import math
-import os
-import subprocess
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
+from scripted_run import parameter, run_with_client
 
 from snakesim.components.ros2.brace_commands import Ros2BraceCommands
 from snakesim.components.ros2.messages import ros_type
 from snakesim.components.ros2.rejections import Rejected
 
-HERE = Path(__file__).parent
 OMEGA0, OMEGA1 = 6.0, 3.0          # rad/s: the scene's screw speed, then the commanded one
 R_SCREW, TILT = 0.07, math.radians(40.0)
 CHANGE_AT = 2.0                    # s of sim time: climb_speed = OMEGA1
@@ -37,60 +32,36 @@ MALFORMED = [
 ]
 
 
-def _param(name, value, typ=3):
-    P, V = ros_type("rcl_interfaces/msg/Parameter"), ros_type("rcl_interfaces/msg/ParameterValue")
-    return P(name=name, value=V(type=typ, double_value=value) if typ == 3 else V(type=typ, integer_value=int(value)))
-
-
 def test_validate_names_the_field():
     E = ros_type("rcl_interfaces/msg/ParameterEvent")
-    ok = Ros2BraceCommands.validate(E(changed_parameters=[_param("climb_speed", -3, 2), _param("target_force", 80.0)]))
+    ok = Ros2BraceCommands.validate(E(changed_parameters=[parameter("climb_speed", -3, 2),
+                                                          parameter("target_force", 80.0)]))
     assert ok == {"climb_speed": -3.0, "target_force": 80.0}
     with pytest.raises(Rejected, match=r"value \(target_force\) = -5 N is out of range \(> 0\)"):
-        Ros2BraceCommands.validate(E(changed_parameters=[_param("target_force", -5.0)]))
+        Ros2BraceCommands.validate(E(changed_parameters=[parameter("target_force", -5.0)]))
     with pytest.raises(Rejected, match=r"value \(climb_speed\) = inf is not finite"):
-        Ros2BraceCommands.validate(E(changed_parameters=[_param("climb_speed", math.inf)]))
+        Ros2BraceCommands.validate(E(changed_parameters=[parameter("climb_speed", math.inf)]))
     with pytest.raises(Rejected, match=r"deleted_parameters\[0\].name = 'climb_speed' is also set"):
-        Ros2BraceCommands.validate(E(changed_parameters=[_param("climb_speed", 1.0)],
-                                     deleted_parameters=[_param("climb_speed", 0.0)]))
-    back = Ros2BraceCommands.validate(E(deleted_parameters=[_param("target_force", 0.0)]))
+        Ros2BraceCommands.validate(E(changed_parameters=[parameter("climb_speed", 1.0)],
+                                     deleted_parameters=[parameter("climb_speed", 0.0)]))
+    back = Ros2BraceCommands.validate(E(deleted_parameters=[parameter("target_force", 0.0)]))
     assert list(back) == ["target_force"] and math.isnan(back["target_force"])
 
 
-def test_speed_and_load_commands_change_the_climb(dds_domain, tmp_path):
-    domain = dds_domain()
-    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
-    env.pop("CYCLONEDDS_URI", None)
+def test_speed_commands_change_the_climb_rate(dds_domain, tmp_path):
     topic, typ = "/brace/parameters", "ParameterEvent"
     script = [{"at": CHANGE_AT - 0.3, "topic": topic, "type": typ, "msg": m} for m, _ in MALFORMED]
     script.append({"at": CHANGE_AT, "topic": topic, "type": typ,
                    "msg": {"changed_parameters": [{"name": "climb_speed", "value": {"type": 3, "double_value": OMEGA1}}]}})
     script.append({"at": BACK_AT, "topic": topic, "type": typ,
                    "msg": {"deleted_parameters": [{"name": "climb_speed"}]}})
-    client = subprocess.Popen([sys.executable, str(HERE / "gait_client.py"), str(domain), "90", json.dumps(script)],
-                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
-    try:
-        assert json.loads(client.stdout.readline()) == {"ready": True}, client.stderr.read()
-        exe = Path(sys.executable).with_name("snakesim")
-        # the climb starts at 0.5 s (the scene's 11 s hold is the evaluation's business, not this test's)
-        run = subprocess.run([str(exe), "run", "walls-body-brace-climb", "--set", "climb_start=0.5", "--set",
-                              "spin_up=0.5", "--set", "climb_stop=100", "--set", f"climb_speed={OMEGA0}",
-                              "--duration", str(DURATION), "--ros2-domain", str(domain),
-                              "--quiet", "--out", str(tmp_path / "out")],
-                             capture_output=True, text=True, timeout=240, env=env)
-        out, err = client.communicate(timeout=30)
-    finally:
-        if client.poll() is None:
-            client.kill()
-            client.wait()
-    assert run.returncode == 0, run.stderr[-3000:]
-    got = json.loads(out.strip().splitlines()[-1])
-    assert all("error" not in s for s in got["steps"]), got["steps"]
+    # the climb starts at 0.5 s (the scene's 11 s hold is the evaluation's business, not this test's)
+    got, d = run_with_client(dds_domain(), tmp_path / "out",
+                             ["walls-body-brace-climb", "--set", "climb_start=0.5", "--set", "spin_up=0.5", "--set",
+                              "climb_stop=100", "--set", f"climb_speed={OMEGA0}", "--duration", str(DURATION)],
+                             script, client="gait_client.py", rejections=[r for _, r in MALFORMED])
     sent, back = (s["clock_ns"] * 1e-9 for s in got["steps"][-2:])     # sim times the valid commands went out
     assert CHANGE_AT <= sent < CHANGE_AT + 0.5 and BACK_AT <= back < BACK_AT + 0.5
-    for _, reason in MALFORMED:
-        assert reason in run.stderr, f"no rejection '{reason}' in the run's log:\n{run.stderr[-3000:]}"
-    d = np.genfromtxt(tmp_path / "out" / "signals.csv", delimiter=",", names=True)
     t, z = d["t"], d["robotcomz"]
 
     def rate(a, b):

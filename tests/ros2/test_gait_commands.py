@@ -3,21 +3,16 @@
 yaw joint's oscillation changes from the scene's frequency to the commanded one; malformed commands are
 rejected, naming the field, and the run goes on."""
 
-import json
 import math
-import os
-import subprocess
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
+from scripted_run import parameter, run_with_client
 
 from snakesim.components.ros2.gait_commands import Ros2GaitCommands
 from snakesim.components.ros2.messages import ros_type
 from snakesim.components.ros2.rejections import Rejected
 
-HERE = Path(__file__).parent
 F0, F1 = 1.0, 2.0          # Hz: the scene's frequency, then the commanded one
 CHANGE_AT = 2.0            # s of sim time
 DURATION = 4.0
@@ -34,25 +29,20 @@ MALFORMED = [
 ]
 
 
-def _param(name, value, typ=3):
-    P, V = ros_type("rcl_interfaces/msg/Parameter"), ros_type("rcl_interfaces/msg/ParameterValue")
-    return P(name=name, value=V(type=typ, double_value=value) if typ == 3 else V(type=typ, integer_value=int(value)))
-
-
 def test_validate_names_the_field():
     E = ros_type("rcl_interfaces/msg/ParameterEvent")
-    ok = Ros2GaitCommands.validate(E(changed_parameters=[_param("frequency", 0.8), _param("direction", -1, 2)]))
+    ok = Ros2GaitCommands.validate(E(changed_parameters=[parameter("frequency", 0.8), parameter("direction", -1, 2)]))
     assert ok == {"frequency": 0.8, "direction": -1.0}
     with pytest.raises(Rejected, match=r"changed_parameters\[1\].name = 'frequency' is given twice"):
-        Ros2GaitCommands.validate(E(changed_parameters=[_param("frequency", 0.8), _param("frequency", 0.9)]))
+        Ros2GaitCommands.validate(E(changed_parameters=[parameter("frequency", 0.8), parameter("frequency", 0.9)]))
     with pytest.raises(Rejected, match=r"value \(frequency\) = nan is not finite"):
-        Ros2GaitCommands.validate(E(changed_parameters=[_param("frequency", math.nan)]))
+        Ros2GaitCommands.validate(E(changed_parameters=[parameter("frequency", math.nan)]))
     with pytest.raises(Rejected, match=r"value \(wavelength\) = 0 joints is out of range \(> 0\)"):
-        Ros2GaitCommands.validate(E(changed_parameters=[_param("wavelength", 0.0)]))
+        Ros2GaitCommands.validate(E(changed_parameters=[parameter("wavelength", 0.0)]))
     with pytest.raises(Rejected, match="all empty"):
         Ros2GaitCommands.validate(E())
     # deleting a parameter gives it back to the scene (NaN)
-    back = Ros2GaitCommands.validate(E(deleted_parameters=[_param("frequency", 0.0)]))
+    back = Ros2GaitCommands.validate(E(deleted_parameters=[parameter("frequency", 0.0)]))
     assert list(back) == ["frequency"] and math.isnan(back["frequency"])
 
 
@@ -69,33 +59,13 @@ def dominant_frequency(t, q):
 
 
 def test_frequency_command_changes_the_joint_motion(dds_domain, tmp_path):
-    domain = dds_domain()
-    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
-    env.pop("CYCLONEDDS_URI", None)
     topic, typ = "/gait/parameters", "ParameterEvent"
     script = [{"at": CHANGE_AT - 0.3, "topic": topic, "type": typ, "msg": m} for m, _ in MALFORMED]
     script.append({"at": CHANGE_AT, "topic": topic, "type": typ,
                    "msg": {"changed_parameters": [{"name": "frequency", "value": {"type": 3, "double_value": F1}}]}})
-    client = subprocess.Popen([sys.executable, str(HERE / "gait_client.py"), str(domain), "90", json.dumps(script)],
-                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
-    try:
-        assert json.loads(client.stdout.readline()) == {"ready": True}, client.stderr.read()
-        exe = Path(sys.executable).with_name("snakesim")
-        run = subprocess.run([str(exe), "run", "mini-eels-crawl", "--set", "robot.modules=3", "--set",
-                              f"frequency={F0}", "--duration", str(DURATION), "--ros2-domain", str(domain),
-                              "--quiet", "--out", str(tmp_path / "out")],
-                             capture_output=True, text=True, timeout=180, env=env)
-        out, err = client.communicate(timeout=30)
-    finally:
-        if client.poll() is None:
-            client.kill()
-            client.wait()
-    assert run.returncode == 0, run.stderr[-3000:]
-    got = json.loads(out.strip().splitlines()[-1])
-    assert all("error" not in s for s in got["steps"]), got["steps"]
-    for _, reason in MALFORMED:
-        assert reason in run.stderr, f"no rejection '{reason}' in the run's log:\n{run.stderr[-3000:]}"
-    d = np.genfromtxt(tmp_path / "out" / "signals.csv", delimiter=",", names=True)
+    _, d = run_with_client(dds_domain(), tmp_path / "out", ["mini-eels-crawl", "--set", "robot.modules=3", "--set",
+                                                            f"frequency={F0}", "--duration", str(DURATION)],
+                           script, client="gait_client.py", timeout=180, rejections=[r for _, r in MALFORMED])
     t, q = d["t"], d["robotjoint_qbend_01"]
     before = (t > 0.2) & (t < CHANGE_AT - 0.05)        # 1.75 cycles at F0 (the malformed commands change nothing)
     after = t > CHANGE_AT + 0.5                          # the PD's transient over

@@ -2,18 +2,14 @@
 releases the tether of the hanging robot; malformed commands are rejected and the run goes on."""
 
 import json
-import os
-import subprocess
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
+from scripted_run import run_with_client
 
 from snakesim.framework.assembly import resolve
 from snakesim.framework.registry import default_registry
 
-HERE = Path(__file__).parent
 G = 9.81                  # m/s², the multibody's default gravity
 RELEASE_AT = 0.5          # s of sim time: the robot hangs still by then (tension ≈ its weight)
 DURATION = 1.2
@@ -45,31 +41,12 @@ MALFORMED = [
 
 
 def test_releasing_the_tether_drops_the_tension_to_zero_and_the_robot_falls(dds_domain, tmp_path):
-    domain = dds_domain()
-    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
-    env.pop("CYCLONEDDS_URI", None)
     script = [{"at": RELEASE_AT - 0.1, "topic": "/tethers/attached", "type": "UInt8MultiArray", "msg": m}
               for m, _ in MALFORMED]
     script.append({"at": RELEASE_AT, "topic": "/tethers/attached", "type": "UInt8MultiArray", "msg": {"data": [0]}})
-    client = subprocess.Popen([sys.executable, str(HERE / "sim_client.py"), str(domain), "60", json.dumps(script)],
-                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
-    try:
-        assert json.loads(client.stdout.readline()) == {"ready": True}, client.stderr.read()
-        exe = Path(sys.executable).with_name("snakesim")
-        run = subprocess.run([str(exe), "run", "tube-dangling", "--set", "robot.modules=2", "--set", "swing=0",
-                              "--duration", str(DURATION), "--ros2-domain", str(domain), "--quiet",
-                              "--out", str(tmp_path / "out")], capture_output=True, text=True, timeout=120, env=env)
-        out, err = client.communicate(timeout=30)
-    finally:
-        if client.poll() is None:
-            client.kill()
-            client.wait()
-    assert run.returncode == 0, run.stderr[-3000:]
-    got = json.loads(out.strip().splitlines()[-1])
-    assert all("error" not in s for s in got["steps"]), got["steps"]
-    for _, reason in MALFORMED:
-        assert reason in run.stderr, f"no rejection '{reason}' in the run's log:\n{run.stderr[-3000:]}"
-    d = np.genfromtxt(tmp_path / "out" / "signals.csv", delimiter=",", names=True)
+    _, d = run_with_client(dds_domain(), tmp_path / "out", ["tube-dangling", "--set", "robot.modules=2", "--set",
+                                                            "swing=0", "--duration", str(DURATION)],
+                           script, client_seconds=60, timeout=120, rejections=[r for _, r in MALFORMED])
     t, tension, z = d["t"], d["tethertension0"], d["robotcomz"]
     normal = d["contactnormal_force0"]
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
