@@ -4,13 +4,19 @@ geometry, frame times, and the default scene's real-time factor with the sensors
 rays      at each scene's initial state (the robot as the scene starts it, the terrain as the
           sensor_scene builds it), the same world rays cast (a) by raw ``embreex``: one Embree
           scene holding the terrain mesh and the posed robot mesh, ``run(..., output=1)``, as one
-          call ("raw") and dealt out to the caster's chunks, one thread each ("raw xN": embreex
-          releases the GIL; the pipeline casts its chunks so, N = numba's thread count), and
+          call ("raw") and split into the caster's chunks, one thread each ("raw xN": embreex
+          releases the GIL; the pipeline casts its chunks so, N = numba's thread count; both in
+          the sensor's cast order: a lidar's pattern order, a camera's interleaved), and
           (b) by the sensor:
           ``Lidar.sample`` (64x1024, spinning-64) and ``StereoCamera``'s render of both eyes
           (640x480 pinhole, sun without shadows): everything from the sensor pose to the
           finished scan or images. Raw and pipeline run in turn in each repeat, best of
           ``--repeats``. pipeline/raw rays per second is the pipeline's efficiency (target ≥ 0.7).
+          The lidar twice: ``terrain_hits: exact`` (the default: hits on a curved analytic
+          terrain refined onto its surface, what the contact model touches) and ``mesh`` (the
+          tessellation's hits: the geometry raw casts), with the range difference of the
+          mesh's returns from the exact ones (max, rms, 99th percentile; beams that return in
+          both) and how many beams change status; the stereo pair likewise (speed only).
 frames    the same sensors' time on a fresh instant (link rotations and bounding spheres not yet
           computed: nothing else is built per instant), in the obstacle course and the moulin.
 rtf       the default scene (surface-screw-traverse, its dt and integrator) with a 64x1024 lidar
@@ -27,6 +33,7 @@ from __future__ import annotations
 
 import argparse
 import concurrent.futures
+import copy
 import json
 import os
 import platform
@@ -41,17 +48,19 @@ import numpy as np  # noqa: E402
 from snakesim.components.perception import SensorScene  # noqa: E402
 from snakesim.components.perception.attach import attach_lidar, attach_stereo  # noqa: E402
 from snakesim.components.perception.hit_kernels import rays_to_world  # noqa: E402
-from snakesim.components.perception.ray_caster import (THREADS, RobotScenes, SensorWorld, chunks,  # noqa: E402
-                                                        embree_scene)
-from snakesim.components.perception.ray_caster import interleaved as cast_order  # noqa: E402
+from snakesim.components.perception.lidar import RETURN  # noqa: E402
+from snakesim.components.perception.ray_caster import (CAST_CHUNK_MIN, THREADS, CastBuffers,  # noqa: E402
+                                                        RobotScenes, SensorWorld, chunks, embree_scene)
 from snakesim.framework.assembly import resolve  # noqa: E402
 from snakesim.framework.registry import default_registry  # noqa: E402
 from snakesim.framework.session import Session  # noqa: E402
 
 _POOL = concurrent.futures.ThreadPoolExecutor(THREADS)
 SCENES = {"obstacle-course": "perception-obstacle-course", "moulin": "moulin"}
-#: scenes whose robot has no head sensor frames (the moulin's EELS 1.5): mount on the front module
-MOUNTS = {"moulin": {"link": "module_03", "xyz": [0.45, 0.0, 0.1]}}
+#: scenes whose robot has no head sensor frames (the moulin's EELS 1.5): mount on the front module,
+#: 0.3 m ahead of its frame, in the shaft 12 cm from the wall (at [0.45, 0, 0.1] it sat 5 cm inside
+#: the ice, and its beams hit the wall from behind)
+MOUNTS = {"moulin": {"link": "module_03", "xyz": [0.3, 0.0, 0.0]}}
 DEFAULT = "surface-screw-traverse"
 
 
@@ -135,13 +144,12 @@ def interleaved(fns: dict, repeats: int) -> dict:
 
 
 def raw_cast(scene, o32, d32, far, threaded: bool):
-    """Raw embreex: one ``run`` over every ray, or the rays dealt out in turn to the caster's chunks
-    (``ray_caster.interleaved``, as the sensors order them), one thread each (embreex releases the GIL)."""
-    if not threaded or len(chunks(len(o32))) == 1:
+    """Raw embreex: one ``run`` over every ray, or the rays (in the sensor's cast order) split into
+    the caster's chunks (``chunks(n, CAST_CHUNK_MIN)``), one thread each (embreex releases the GIL)."""
+    parts = chunks(len(o32), CAST_CHUNK_MIN)
+    if not threaded or len(parts) == 1:
         return scene.run(o32, d32, dists=far.copy(), query="INTERSECT", output=1)
-    order = cast_order(len(o32))
-    o32, d32 = o32[order], d32[order]
-    futures = [_POOL.submit(scene.run, o32[sl], d32[sl], far[sl].copy(), "INTERSECT", 1) for sl in chunks(len(o32))]
+    futures = [_POOL.submit(scene.run, o32[sl], d32[sl], far[sl].copy(), "INTERSECT", 1) for sl in parts]
     return [f.result() for f in futures]
 
 
@@ -157,11 +165,20 @@ def rays(scene: str, repeats: int) -> dict:
     o32, d32 = world_rays(R, p, lidar.pattern.origins, lidar.pattern.directions, 1e-6)
     far = np.full(len(o32), lidar.max_range, np.float32)
     raw.run(o32[:10], d32[:10])
-    lidar.sample(world, 0.0, 0)
+    exact = lidar.sample(world, 0.0, 0)
+    # the same lidar with terrain_hits: mesh (its own buffers: a scan's arrays are views of them)
+    mesh_lidar = copy.copy(lidar)
+    mesh_lidar.p = lidar.p.model_copy(update={"terrain_hits": "mesh"})
+    mesh_lidar.buffers = CastBuffers(lidar.buffers.n)
+    mesh = mesh_lidar.sample(world, 0.0, 0)
+    both = (exact.status == RETURN) & (mesh.status == RETURN)
+    err = np.abs(mesh.range[both].astype(float) - exact.range[both])
     tl = interleaved({"raw": lambda: raw_cast(raw, o32, d32, far, False),
                       "raw_threads": lambda: raw_cast(raw, o32, d32, far, True),
                       "pipeline": lambda: lidar.sample(world, 0.0, 0),
-                      "frame": lambda: lidar.sample(fresh(world), 0.0, 0)}, repeats)
+                      "mesh": lambda: mesh_lidar.sample(world, 0.0, 0),
+                      "frame": lambda: lidar.sample(fresh(world), 0.0, 0),
+                      "mesh_frame": lambda: mesh_lidar.sample(fresh(world), 0.0, 0)}, repeats)
 
     # the stereo pair: both eyes' rays raw, against both renders
     Rl, pl = stereo.pose(world)
@@ -170,15 +187,22 @@ def rays(scene: str, repeats: int) -> dict:
     farc = np.full(len(stereo._o), stereo.p.max_range, np.float32)
     n_cam = 2 * len(stereo._o)
 
-    def render(w):
-        stereo.render(w, Rl, pl, 0.0, 0, "left")
-        stereo.render(w, Rr, pr, 0.0, 0, "right")
+    mesh_stereo = copy.copy(stereo)             # terrain_hits: mesh, its own buffers
+    mesh_stereo.p = stereo.p.model_copy(update={"terrain_hits": "mesh"})
+    mesh_stereo._buffers = CastBuffers(stereo._buffers.n)
+
+    def render(w, cam=stereo):
+        cam.render(w, Rl, pl, 0.0, 0, "left")
+        cam.render(w, Rr, pr, 0.0, 0, "right")
 
     render(world)
+    render(world, mesh_stereo)
     tc = interleaved({"raw": lambda: [raw_cast(raw, a, b, farc, False) for a, b in eyes],
                       "raw_threads": lambda: [raw_cast(raw, a, b, farc, True) for a, b in eyes],
                       "pipeline": lambda: render(world),
-                      "frame": lambda: render(fresh(world))}, repeats)
+                      "mesh": lambda: render(world, mesh_stereo),
+                      "frame": lambda: render(fresh(world)),
+                      "mesh_frame": lambda: render(fresh(world), mesh_stereo)}, repeats)
     t0 = time.perf_counter()
     RobotScenes(world.robot.surfaces)
     t_build = time.perf_counter() - t0
@@ -191,10 +215,25 @@ def rays(scene: str, repeats: int) -> dict:
         "lidar_pipeline_rays_per_s": n_l / tl["pipeline"],
         "lidar_efficiency": tl["raw"] / tl["pipeline"], "lidar_efficiency_threads": tl["raw_threads"] / tl["pipeline"],
         "lidar_frame_s": tl["frame"],
+        "lidar_mesh_raw_rays_per_s": n_l / tl["raw"], "lidar_mesh_raw_threads_rays_per_s": n_l / tl["raw_threads"],
+        "lidar_mesh_pipeline_rays_per_s": n_l / tl["mesh"],
+        "lidar_mesh_efficiency": tl["raw"] / tl["mesh"],
+        "lidar_mesh_efficiency_threads": tl["raw_threads"] / tl["mesh"],
+        "lidar_mesh_frame_s": tl["mesh_frame"],
+        "mesh_range_error_max_m": float(err.max(initial=0.0)),
+        "mesh_range_error_rms_m": float(np.sqrt(np.mean(err ** 2))) if err.size else 0.0,
+        "mesh_range_error_p99_m": float(np.percentile(err, 99)) if err.size else 0.0,
+        "mesh_returns_compared": int(both.sum()), "mesh_status_changed": int(np.sum(exact.status != mesh.status)),
         "camera_raw_rays_per_s": n_cam / tc["raw"], "camera_raw_threads_rays_per_s": n_cam / tc["raw_threads"],
         "camera_pipeline_rays_per_s": n_cam / tc["pipeline"],
         "camera_efficiency": tc["raw"] / tc["pipeline"], "camera_efficiency_threads": tc["raw_threads"] / tc["pipeline"],
         "stereo_frame_s": tc["frame"],
+        "camera_mesh_raw_rays_per_s": n_cam / tc["raw"],
+        "camera_mesh_raw_threads_rays_per_s": n_cam / tc["raw_threads"],
+        "camera_mesh_pipeline_rays_per_s": n_cam / tc["mesh"],
+        "camera_mesh_efficiency": tc["raw"] / tc["mesh"],
+        "camera_mesh_efficiency_threads": tc["raw_threads"] / tc["mesh"],
+        "stereo_mesh_frame_s": tc["mesh_frame"],
         "robot_scenes_build_s": t_build,
     }
 
@@ -237,11 +276,16 @@ def main(argv=None) -> int:
     print(f"{'scene':>28} {'sensor':>8} {'rays':>8} {'raw Mray/s':>10} {f'raw x{THREADS}':>8} {'pipe Mray/s':>11} "
           f"{'pipe/raw':>8} {f'pipe/raw x{THREADS}':>13} {'frame ms':>9}")
     for r in results:
-        for key, name, n in (("lidar", "lidar", "lidar_rays"), ("camera", "stereo", "camera_rays")):
+        for key, name, n, frame in (("lidar", "lidar", "lidar_rays", "lidar_frame_s"),
+                                    ("lidar_mesh", "li. mesh", "lidar_rays", "lidar_mesh_frame_s"),
+                                    ("camera", "stereo", "camera_rays", "stereo_frame_s"),
+                                    ("camera_mesh", "st. mesh", "camera_rays", "stereo_mesh_frame_s")):
             print(f"{r['scene'] if key == 'lidar' else '':>28} {name:>8} {r[n]:8d} {r[key + '_raw_rays_per_s'] / 1e6:10.2f} "
                   f"{r[key + '_raw_threads_rays_per_s'] / 1e6:8.2f} {r[key + '_pipeline_rays_per_s'] / 1e6:11.2f} "
-                  f"{r[key + '_efficiency']:8.2f} {r[key + '_efficiency_threads']:13.2f} "
-                  f"{1e3 * r[key + '_frame_s' if key == 'lidar' else 'stereo_frame_s']:9.1f}")
+                  f"{r[key + '_efficiency']:8.2f} {r[key + '_efficiency_threads']:13.2f} {1e3 * r[frame]:9.1f}")
+        print(f"{'':>28} lidar terrain_hits mesh vs exact: range error max {1e3 * r['mesh_range_error_max_m']:.2f} mm, "
+              f"rms {1e3 * r['mesh_range_error_rms_m']:.3f} mm, p99 {1e3 * r['mesh_range_error_p99_m']:.3f} mm "
+              f"({r['mesh_returns_compared']} returns in both); {r['mesh_status_changed']} beams change status")
         print(f"{'':>28} robot: {r['robot_faces']} faces in per-link scenes built once "
               f"({1e3 * r['robot_scenes_build_s']:.0f} ms); terrain {r['terrain_faces']} faces")
     print(f"target: pipeline/raw >= 0.7; raw = one embreex run() call, raw x{THREADS} = the rays split in {THREADS} "

@@ -104,6 +104,9 @@ class CameraParams(SensorMount, Params):
     near: float = Field(0.01, ge=0, description="m, nothing nearer is seen (rays start here)")
     max_range: float = Field(100.0, gt=0, description="m, nothing farther is seen")
     background: float = Field(0.0, ge=0, description="image value where nothing is hit")
+    terrain_hits: Literal["exact", "mesh"] = Field(
+        "exact", description="exact: hits on a curved analytic terrain refined onto its surface (Newton); "
+                             "mesh: the tessellation's hits (sensor_scene's cell), faster")
     name: str | None = Field(None, description="frame name in the outputs (default: the component's)")
 
 
@@ -154,7 +157,7 @@ class _Camera(Component):
         prm, light = self.p, self.p.light
         h, w = prm.height, prm.width
         hits, o_w, d_w = world.cast_from(R, p_w, self._o, self._d, prm.max_range, prm.near, self._bundle,
-                                            self._buffers)
+                                            self._buffers, prm.terrain_hits == "exact")
         headlamp = light.kind == "headlamp"
         shadowed = np.zeros(len(d_w), dtype=np.bool_)
         if not headlamp and light.shadows:

@@ -5,17 +5,24 @@ hits, and hits into pixels, without a Python or NumPy pass per quantity.
                       starting at min_range
     link_cones        each robot link's cone seen from a sensor bundle's origin ball: its bounding
                       sphere's, or its box's where narrower (.ray_caster.RayBundle.link_cones)
-    bundle_candidates which rays of a sensor's bundle (rays from about one point) can meet which
-                      robot link: directions within the cone the link's bounding sphere subtends,
-                      tested only in the direction bins that cone overlaps; -> CSR lists per
-                      (chunk, link)
-    link_candidates   the same for any rays (shadow rays): the ray's segment [start, start +
+    bundle_link_rays  which rays of a sensor's bundle (rays from about one point) can meet which
+                      robot link: directions within the cone the link's bounding sphere (or box)
+                      subtends, tested only in the direction bins that cone overlaps, then the
+                      segment against the link's box, moved straight from the sensor frame into
+                      the link's; links in the order given (nearest first) -> per link its rays,
+                      in its frame, and where they enter its box
+    tighten           a link's rays of bundle_link_rays cut by the best hits so far (the terrain,
+                      and the links nearer the sensor, cast first)
+    link_candidates   which rays can meet which link, for any rays (shadow rays): the ray's segment [start, start +
                       best·d] against the link's bounding sphere (world), culled first by
                       spheres around groups of consecutive links; -> CSR lists per link
     link_rays         a link's candidate rays in its link frame (float32, Embree's input), those
                       that meet its box before their nearest hit so far (far)
     take_link_hits    a link's Embree hits (nearer than the best so far, by construction) into
                       the per-ray best: distance, robot face, normal turned into the world
+    take_mount_hits   the same for the hits of a sensor's bundle on the link it is fixed to,
+                      cast once in that link's frame (a link cannot move against itself), where
+                      nearer than the best so far
     finish_hits       per ray, the final hit: range from the origin, unit normal facing the ray,
                       albedo, colour, link row, material, and whether the hit is on a face that
                       only approximates a curved terrain
@@ -23,7 +30,7 @@ hits, and hits into pixels, without a Python or NumPy pass per quantity.
                       and the pixel's range and optical-frame depth
 
 Every kernel is serial and works on one chunk of rays: the caster runs the chunks in threads
-(Embree and these kernels release the GIL; ray_caster.in_chunks). No numba parallel region:
+(these kernels release the GIL; ray_caster.in_chunks). No numba parallel region:
 on a loaded machine its workers wait on descheduled threads (measured: a 65k-ray prange
 kernel of 0.25 ms took 9 ms on average with the 2 cores busy).
 """
@@ -144,49 +151,102 @@ def link_cones(R, p, centre_b, rho, centres, radii, reach_max, use_box, link_R, 
             cos_a[k] = 2.0
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _box_entry(s, v, t1, box_lo, box_hi):
+    """Slab test of the segment s + t·v, 0 <= t <= t1, against the box [box_lo, box_hi]:
+    -> the entry t, or −1 when it misses."""
+    t0 = 0.0
+    for a in range(3):
+        if v[a] != 0.0:
+            ta, tb = (box_lo[a] - s[a]) / v[a], (box_hi[a] - s[a]) / v[a]
+            if ta > tb:
+                ta, tb = tb, ta
+            t0, t1 = max(t0, ta), min(t1, tb)
+        elif s[a] < box_lo[a] or s[a] > box_hi[a]:
+            return -1.0
+    return t0 if t0 <= t1 else -1.0
+
+
 @njit(cache=True, nogil=True)
-def bundle_candidates(d, bin_first, bin_rays, bin_axis, bin_cos, bin_sin, u, cos_a, sin_a, edges):
-    """Rays of a bundle (sensor-frame unit directions d (n, 3), binned by direction: bin b holds
-    rays bin_rays[bin_first[b]:bin_first[b + 1]] within the angle (cos, sin) of bin_axis[b]) whose
-    direction lies within each link's cone (axis u (L, 3), half-angle (cos_a, sin_a); cos_a <= −1:
-    every direction, cos_a > 1: none). A bin is opened only when its cone overlaps the link's. -> (offsets
-    (C·L + 1,), rays): link k's rays of chunk c (rays edges[c] <= i < edges[c + 1]) are
-    rays[offsets[c·L + k]:offsets[c·L + k + 1]], as indices into the chunk."""
-    L, B, C = u.shape[0], bin_axis.shape[0], edges.shape[0] - 1
-    counts = np.zeros(C * L, dtype=np.int64)
-    for phase in range(2):
-        if phase == 1:
-            offsets = np.zeros(C * L + 1, dtype=np.int64)
-            for j in range(C * L):
-                offsets[j + 1] = offsets[j] + counts[j]
-            rays = np.empty(offsets[C * L], dtype=np.int64)
-            fill = offsets[:C * L].copy()
-        for k in range(L):
-            if cos_a[k] > 1.0:           # out of range: no ray
-                continue
+def bundle_link_rays(o_b, d_b, bin_first, bin_rays, bin_axis, bin_cos, bin_sin, u, cos_a, sin_a, links, M, c,
+                     min_range, reach, box_lo, box_hi):
+    """The rays of a bundle that can meet each link, in its frame, for links ``links`` in that
+    order (index k into u, M, c, box_lo/hi (L, 3)): each ray of the bundle within link k's cone
+    whose segment from its start at min_range over ``reach`` meets the link's box (``tighten``
+    then cuts by each ray's nearest hit: this needs no cast, so it can run during the terrain's). The bundle's rays
+    are read in bin order (origins o_b, directions d_b (n, 3) sensor frame: ray bin_rays[q] is row
+    q) and moved straight from the sensor frame into link k's: x_l = M_k x_s + c_k (M_k = R_lᵀR,
+    c_k = R_lᵀ(p − p_l)). -> (offsets (len(links) + 1,), count (len(links),): link links[j]'s rays
+    are offsets[j] .. offsets[j] + count[j] of: ids, their starts and directions in the link frame
+    (float32), and where they enter its box (t, float32))."""
+    B, J = bin_axis.shape[0], links.shape[0]
+    offsets = np.zeros(J + 1, dtype=np.int64)
+    for j in range(J):                   # the rays of the bins the cone overlaps: an upper bound
+        k = links[j]
+        m = 0
+        if cos_a[k] <= 1.0:
             every = cos_a[k] <= -1.0
             for b in range(B):
                 if not every:
-                    # cones overlap when the axes are within a + β: cos(a + β) = cos a cos β − sin a sin β
                     c_ab = bin_axis[b, 0] * u[k, 0] + bin_axis[b, 1] * u[k, 1] + bin_axis[b, 2] * u[k, 2]
                     lim = cos_a[k] * bin_cos[b] - sin_a[k] * bin_sin[b]
-                    # a + β beyond π: every axis overlaps (the sum's cosine formula then no longer bounds)
                     wide = sin_a[k] * bin_cos[b] + cos_a[k] * bin_sin[b] < 0.0
                     if not wide and c_ab < lim:
                         continue
-                for j in range(bin_first[b], bin_first[b + 1]):
-                    i = bin_rays[j]
-                    if not every and d[i, 0] * u[k, 0] + d[i, 1] * u[k, 1] + d[i, 2] * u[k, 2] < cos_a[k]:
-                        continue
-                    c = 0
-                    while i >= edges[c + 1]:
-                        c += 1
-                    if phase == 0:
-                        counts[c * L + k] += 1
-                    else:
-                        rays[fill[c * L + k]] = i - edges[c]
-                        fill[c * L + k] += 1
-    return offsets, rays
+                m += bin_first[b + 1] - bin_first[b]
+        offsets[j + 1] = offsets[j] + m
+    N = offsets[J]
+    ids, entry = np.empty(N, dtype=np.int64), np.empty(N, dtype=np.float32)
+    o_l, d_l = np.empty((N, 3), dtype=np.float32), np.empty((N, 3), dtype=np.float32)
+    count = np.zeros(J, dtype=np.int64)
+    s, v = np.empty(3), np.empty(3)
+    for j in range(J):
+        k = links[j]
+        if offsets[j + 1] == offsets[j]:
+            continue
+        every = cos_a[k] <= -1.0
+        n = offsets[j]
+        for b in range(B):
+            if not every:
+                c_ab = bin_axis[b, 0] * u[k, 0] + bin_axis[b, 1] * u[k, 1] + bin_axis[b, 2] * u[k, 2]
+                lim = cos_a[k] * bin_cos[b] - sin_a[k] * bin_sin[b]
+                wide = sin_a[k] * bin_cos[b] + cos_a[k] * bin_sin[b] < 0.0
+                if not wide and c_ab < lim:
+                    continue
+            for q in range(bin_first[b], bin_first[b + 1]):
+                dx, dy, dz = d_b[q, 0], d_b[q, 1], d_b[q, 2]
+                if not every and dx * u[k, 0] + dy * u[k, 1] + dz * u[k, 2] < cos_a[k]:
+                    continue
+                x, y, z = o_b[q, 0] + min_range * dx, o_b[q, 1] + min_range * dy, o_b[q, 2] + min_range * dz
+                for a in range(3):
+                    s[a] = M[k, a, 0] * x + M[k, a, 1] * y + M[k, a, 2] * z + c[k, a]
+                    v[a] = M[k, a, 0] * dx + M[k, a, 1] * dy + M[k, a, 2] * dz
+                t0 = _box_entry(s, v, reach, box_lo[k], box_hi[k])
+                if t0 < 0.0:
+                    continue
+                ids[n], entry[n] = bin_rays[q], t0
+                for a in range(3):
+                    o_l[n, a], d_l[n, a] = s[a], v[a]
+                n += 1
+        count[j] = n - offsets[j]
+    return offsets, count, ids, o_l, d_l, entry
+
+
+@njit(cache=True, nogil=True)
+def tighten(ids, entry, o_l, d_l, best, far):
+    """A link's rays (ids, box entry t, link-frame rays) kept, in place, where they enter its box
+    before their best hit so far; far = that best (Embree's tfar). -> how many are kept."""
+    n = 0
+    for q in range(ids.shape[0]):
+        i = ids[q]
+        if entry[q] > best[i]:
+            continue
+        ids[n] = i
+        for a in range(3):
+            o_l[n, a], d_l[n, a] = o_l[q, a], d_l[q, a]
+        far[n] = best[i]
+        n += 1
+    return n
 
 
 @njit(cache=True, nogil=True)
@@ -240,6 +300,21 @@ def take_link_hits(rays, geom, tfar, prim, ng, R, face_ids, best, src, face, ng_
         face[i] = face_ids[prim[k]]
         for a in range(3):
             ng_r[i, a] = R[a, 0] * ng[k, 0] + R[a, 1] * ng[k, 1] + R[a, 2] * ng[k, 2]
+
+
+@njit(cache=True, nogil=True)
+def take_mount_hits(tfar, prim, ng, R, best, src, face, ng_r):
+    """Hits cast once on the mount link (Embree's, link frame, from the rays' starts: tfar inf on a
+    miss, prim the robot face index) into the per-ray best where nearer: distance, src = ROBOT,
+    face, normal R·Ng (world)."""
+    for i in range(tfar.shape[0]):
+        if tfar[i] >= best[i]:
+            continue
+        best[i] = tfar[i]
+        src[i] = ROBOT
+        face[i] = prim[i]
+        for a in range(3):
+            ng_r[i, a] = R[a, 0] * ng[i, 0] + R[a, 1] * ng[i, 1] + R[a, 2] * ng[i, 2]
 
 
 @njit(cache=True, nogil=True)

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
-from scipy.spatial.transform import Rotation
 
 from snakesim.components.control.joint_selection import match
 from snakesim.components.multibody.robot_model import RobotModel
@@ -52,11 +51,6 @@ def mount_on(robot: RobotModel, mount: SensorMount, owner: str, optical: bool = 
     if optical:
         R = R @ BODY_TO_OPTICAL
     return robot.link_index(mount.link), R, np.array(mount.xyz, dtype=float)
-
-
-def rotations_from_quaternions(q: np.ndarray) -> np.ndarray:
-    """(n, 3, 3) rotation matrices of quaternions (n, 4) in (x, y, z, w) order (link_poses' order)."""
-    return Rotation.from_quat(q).as_matrix()
 
 
 def quaternion_xyzw(R: np.ndarray) -> np.ndarray:

@@ -1,6 +1,6 @@
 """Compiled hit refinement for the Fourier-cylinder terrains (tube, rough tube, moulin): the
-Newton iteration of .ray_caster (f(t) = d(o + t·r), t ← t − f/f', f' = n·r, two iterations,
-a grazing or too long step keeps the mesh hit) with the terrain's distance written out per
+Newton iteration of .ray_caster (f(t) = d(o + t·r), t ← t − f/f', f' = n·r, until the error
+left is below the tolerance, a grazing or too long step keeps the mesh hit) with the terrain's distance written out per
 point instead of NumPy passes over (rays × modes) arrays. The distance is the terrain's
 own (components/terrain/analytic.py, ``FourierCylinder`` and ``Moulin``):
 
@@ -16,8 +16,15 @@ e^{iθ} = (u + iv)/r, with no trigonometric call; e^{i(k s + φ)} comes from a t
 e^{i k (s − s_g)} from the nearest node s_g, a Taylor series in |k (s − s_g)| <= 0.05 to
 seventh order (error < 1e-15): no trigonometric call either (a sine and a cosine per mode
 cost ~20 ns here, the whole rotation ~5). Off the table (a point past the mesh's span) the
-sine and cosine are called. tests/perception/test_refine_kernels.py checks the distance and normal against
-the terrain's query and the refined hits against the NumPy iteration.
+sine and cosine are called.
+
+A hit nearer than a sensor's minimum range only blocks its beam: ``newton`` keeps such a mesh
+hit when the point at that range along the ray is inside the terrain (the true surface was
+crossed before it), which takes r_s alone, its modes added largest first until the rest
+(Σ|A_j| of the modes left) cannot change the side (``_beyond_wall``).
+
+tests/perception/test_refine_kernels.py checks the distance and normal against the terrain's
+query, the inside test against its sign, and the refined hits against the NumPy iteration.
 """
 
 from __future__ import annotations
@@ -57,6 +64,9 @@ class FourierRefiner:
         arg = (self.s0 + self.h * np.arange(nodes))[:, None] * self.k + self.phase
         self.table = np.ascontiguousarray(np.stack([np.cos(arg), np.sin(arg)]))     # (2, G, J)
         self.Am, self.Ak = self.A * self.m, self.A * self.k
+        # modes largest first, and what the rest can add (_beyond_wall stops once it cannot matter)
+        self.by_size = np.argsort(-np.abs(self.A), kind="stable").astype(np.int64)
+        self.tail = np.r_[np.cumsum(np.abs(self.A)[self.by_size][::-1])[::-1], 0.0]
 
     @staticmethod
     def for_terrain(terrain, vertices=None, margin: float = 1.0) -> "FourierRefiner | None":
@@ -79,14 +89,24 @@ class FourierRefiner:
             span = (float(s.min()) - margin, float(s.max()) + margin)
         return FourierRefiner(shaft, surface, top, terrain.region_material, span)
 
-    def refine(self, o, d, rays, iterations: int, grazing: float, limit: float, albedo_m, color_m, distance, normal,
-               albedo, color, material):
+    def refine(self, o, d, rays, iterations: int, tolerance: float, grazing: float, limit: float, albedo_m, color_m,
+               distance, normal, albedo, color, material, near: float = 0.0):
         """Newton from the mesh hits (``distance``) of rays ``rays`` of (o, d (n, 3)); in place where it
-        converges (``newton``)."""
-        newton(o, d, rays, iterations, grazing, limit, self.origin, self.R, self.radius, self.slope, self.A,
-               self.m, self.k, self.phase, self.Am, self.Ak, int(self.m.max(initial=0)), self.table, self.s0, self.h,
-               self.surface, self.top, self.region_material, albedo_m, color_m, distance, normal, albedo, color,
-               material)
+        converges; mesh hits nearer than ``near`` that the ray has passed by then are kept (``newton``)."""
+        newton(o, d, rays, iterations, tolerance, grazing, limit, float(near), self.origin, self.R, self.radius,
+               self.slope, self.A, self.m, self.k, self.phase, self.Am, self.Ak, self.by_size, self.tail,
+               int(self.m.max(initial=0)), self.table, self.s0, self.h, self.surface, self.top, self.region_material,
+               albedo_m, color_m, distance, normal, albedo, color, material)
+
+    def beyond_wall(self, points) -> np.ndarray:
+        """(n,) whether world points are inside the terrain (its distance < 0), as ``newton`` tells
+        a hit that only blocks (``_beyond_wall``)."""
+        p = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
+        out = np.empty(len(p), dtype=np.bool_)
+        beyond_points(p, self.origin, self.R, self.radius, self.slope, self.A, self.m, self.k, self.phase,
+                      self.by_size, self.tail, int(self.m.max(initial=0)), self.table, self.s0, self.h, self.surface,
+                      self.top, out)
+        return out
 
     def query(self, points):
         """(distance (n,), normal (n, 3), material (n,)) at world points: the terrain's query."""
@@ -160,6 +180,66 @@ def _distance(x, y, z, origin, R, radius, slope, A, m, k, phase, Am, Ak, order, 
 
 
 @njit(cache=True, nogil=True)
+def _beyond_wall(x, y, z, origin, R, radius, slope, A, m, k, phase, by_size, tail, order, powers, table, s0, h,
+                 surface, top):
+    """Whether (x, y, z) is inside the terrain (signed distance < 0: r > r_s, and below the top
+    where there is a surface), from r_s alone (no derivatives): the modes are added largest
+    first (``by_size``) and the sum stops once the rest (``tail[q]`` = Σ|A| of the modes from
+    the q-th on) cannot change the side of r − (R + slope·s) it is on."""
+    if surface and z >= top:
+        return False
+    px, py, pz = x - origin[0], y - origin[1], z - origin[2]
+    u = R[0, 0] * px + R[1, 0] * py + R[2, 0] * pz
+    v = R[0, 1] * px + R[1, 1] * py + R[2, 1] * pz
+    s = R[0, 2] * px + R[1, 2] * py + R[2, 2] * pz
+    r = math.hypot(u, v)
+    gap = r - (radius + slope * s)
+    if gap > tail[0]:
+        return True
+    if gap < -tail[0]:
+        return False
+    if r > 0.0:
+        ct, st = u / r, v / r
+    else:
+        ct, st = 1.0, 0.0
+    powers[0, 0], powers[1, 0] = 1.0, 0.0
+    for q in range(1, order + 1):
+        a, b = powers[0, q - 1], powers[1, q - 1]
+        powers[0, q], powers[1, q] = a * ct - b * st, a * st + b * ct
+    wall = 0.0
+    g = int(math.floor((s - s0) / h + 0.5))
+    on_table = 0 <= g < table.shape[1]
+    ds = s - (s0 + g * h)
+    for q in range(by_size.shape[0]):
+        j = by_size[q]
+        if on_table:
+            e = k[j] * ds
+            e2 = e * e
+            ce = 1.0 - e2 * (0.5 - e2 * (1.0 / 24.0 - e2 * (1.0 / 720.0)))
+            se = e * (1.0 - e2 * (1.0 / 6.0 - e2 * (1.0 / 120.0 - e2 * (1.0 / 5040.0))))
+            cw = table[0, g, j] * ce - table[1, g, j] * se
+            sw = table[1, g, j] * ce + table[0, g, j] * se
+        else:
+            ks = k[j] * s + phase[j]
+            cw, sw = math.cos(ks), math.sin(ks)
+        wall += A[j] * (powers[0, m[j]] * cw - powers[1, m[j]] * sw)
+        if gap - wall > tail[q + 1]:
+            return True
+        if wall - gap > tail[q + 1]:
+            return False
+    return gap > wall
+
+
+@njit(cache=True, nogil=True)
+def beyond_points(p, origin, R, radius, slope, A, m, k, phase, by_size, tail, order, table, s0, h, surface, top,
+                  out):
+    powers = np.empty((4, max(order + 1, A.shape[0])))
+    for i in range(p.shape[0]):
+        out[i] = _beyond_wall(p[i, 0], p[i, 1], p[i, 2], origin, R, radius, slope, A, m, k, phase, by_size, tail,
+                              order, powers, table, s0, h, surface, top)
+
+
+@njit(cache=True, nogil=True)
 def query_points(p, origin, R, radius, slope, A, m, k, phase, Am, Ak, order, table, s0, h, surface, top,
                  region_material, dist, normal, material):
     powers = np.empty((4, max(order + 1, A.shape[0])))
@@ -170,29 +250,45 @@ def query_points(p, origin, R, radius, slope, A, m, k, phase, Am, Ak, order, tab
 
 
 @njit(cache=True, nogil=True)
-def newton(o, d, rays, iterations, grazing, limit, origin, R, radius, slope, A, m, k, phase, Am, Ak, order, table, s0,
-           h, surface, top, region_material, albedo_m, color_m, distance, normal, albedo, color, material):
+def newton(o, d, rays, iterations, tolerance, grazing, limit, near, origin, R, radius, slope, A, m, k, phase, Am, Ak,
+           by_size, tail, order, table, s0, h, surface, top, region_material, albedo_m, color_m, distance, normal,
+           albedo, color, material):
     """The NumPy iteration of .ray_caster.StaticTerrainScene._refine, written out, for the rays
-    ``rays`` of (o, d) from their mesh hits ``distance``: where it converges, the refined distance,
+    ``rays`` of (o, d) from their mesh hits ``distance`` (at most ``iterations`` steps, done once
+    the error left is below ``tolerance`` m: .ray_caster.REFINE_TOLERANCE): where it converges, the
+    refined distance,
     normal facing the ray, material and its albedo and colour (albedo_m, color_m per material)
-    replace the mesh hit's in place."""
+    replace the mesh hit's in place. A mesh hit nearer than ``near`` m whose ray is inside the
+    terrain at ``near`` (the true surface crossed before it: ``_beyond_wall``) is kept as it is:
+    a sensor only needs to know it is nearer (a lidar's minimum range)."""
     powers = np.empty((4, max(order + 1, A.shape[0])))
     n = np.empty(3)
     for q in range(rays.shape[0]):
         i = rays[q]
         t0 = distance[i]
+        if t0 < near and _beyond_wall(o[i, 0] + near * d[i, 0], o[i, 1] + near * d[i, 1], o[i, 2] + near * d[i, 2],
+                                      origin, R, radius, slope, A, m, k, phase, by_size, tail, order, powers, table,
+                                      s0, h, surface, top):
+            continue
         t = t0
         good = True
         slope_r = 0.0
         region = 0
+        last = 0.0
         for _ in range(iterations):
             dist, region = _distance(o[i, 0] + t * d[i, 0], o[i, 1] + t * d[i, 1], o[i, 2] + t * d[i, 2], origin, R,
                                      radius, slope, A, m, k, phase, Am, Ak, order, powers, table, s0, h, surface,
                                      top, n)
             slope_r = n[0] * d[i, 0] + n[1] * d[i, 1] + n[2] * d[i, 2]
-            good = good and abs(slope_r) > grazing
-            if good:
-                t = t - dist / slope_r
+            if abs(slope_r) <= grazing:
+                good = False
+                break
+            step = dist / slope_r
+            t = t - step
+            a = abs(step)
+            if a < tolerance or a * a * a < tolerance * last * last:      # error left ≈ a³/last² (``done``)
+                break
+            last = a
         if not (good and abs(t - t0) < limit):
             continue
         distance[i] = t

@@ -170,6 +170,7 @@ def test_pixels_without_a_ray_are_background():
     ({"near": 5.0, "max_range": 1.0}, ["near", "max_range"]),
     ({"width": 0}, ["width"]),
     ({"light": {"kind": "sun", "direction": (0, 0, 0)}}, ["direction"]),
+    ({"terrain_hits": "approximate"}, ["terrain_hits", "exact", "mesh"]),
 ])
 def test_bad_camera_parameters_are_named(params, words):
     with pytest.raises(Exception) as e:

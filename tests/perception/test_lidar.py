@@ -62,6 +62,27 @@ def test_inside_a_tube_of_known_radius():
     np.testing.assert_allclose(s.range, expected, rtol=2 * F32)      # stored as float32
 
 
+def test_mesh_terrain_hits_are_the_tessellations():
+    """terrain_hits: mesh returns the tube's faces, off the exact ranges by at most the faces' own
+    distance from the surface (found by sampling them) over the beam's radial part, and off by
+    more than rounding (the knob does skip the refinement)."""
+    radius = 0.45
+    tube = terrain({"kind": "tube", "radius": radius, "axis": (1.0, 0.0, 0.0)})
+    world = world_at(tube, all_links_at((2.0, 0.0, 0.0)))
+    beams = {**GRID, "vertical_fov": (-80.0, 80.0)}
+    exact, _ = scan(world, {"beams": beams, "max_range": 20.0})
+    mesh, _ = scan(world, {"beams": beams, "max_range": 20.0, "terrain_hits": "mesh"})
+    surf = world.terrain.surfaces
+    tri = surf.vertices[surf.faces]                                   # (m, 3, 3)
+    w = np.array([(a, b, 10 - a - b) for a in range(11) for b in range(11 - a)]) / 10.0
+    sag = np.abs(tube.query((w @ tri).reshape(-1, 3)).distance).max()
+    radial = np.hypot(*grid_directions(beams)[:, 1:].T)
+    assert np.all(mesh.status == RETURN)
+    err = np.abs(mesh.range.astype(float) - exact.range)
+    assert np.all(err * radial <= sag * (1 + 1e-6) + 1e-6)
+    assert err.max() > 100 * F32 * radius
+
+
 def test_between_parallel_walls():
     gap = 0.8
     walls = terrain({"kind": "parallel_walls", "gap": gap})
@@ -146,6 +167,7 @@ def test_presets_turn_on_with_one_line():
     ({"beams": {"kind": "grid", "channels": 4, "horizontal_samples": 4, "vertical_fov": (10.0, -10.0)}},
      ["vertical_fov"]),
     ({"preset": "spinning-32", "dropout": 1.5}, ["dropout"]),
+    ({"preset": "spinning-32", "terrain_hits": "fast"}, ["terrain_hits", "exact", "mesh"]),
 ])
 def test_bad_parameters_are_named(params, words):
     with pytest.raises(Exception) as e:

@@ -66,12 +66,66 @@ def test_compiled_refinement_equals_the_numpy_iteration(kind, monkeypatch):
     hit = np.isfinite(numpy.distance)
     assert hit.mean() > 0.9
     np.testing.assert_array_equal(np.isfinite(compiled.distance), hit)
-    np.testing.assert_allclose(compiled.distance[hit], numpy.distance[hit], rtol=0, atol=1e-12)
-    np.testing.assert_allclose(compiled.normal[hit], numpy.normal[hit], rtol=0, atol=1e-12)
+    # each evaluation rounds (~1e-16 m, sums reassociated in the compiled one), so where the error a
+    # step leaves is within rounding of REFINE_TOLERANCE the two may stop one step apart: the one
+    # that stops is then off by about that error (10x for the estimate's slack); all but a few agree
+    tol = rc.REFINE_TOLERANCE
+    np.testing.assert_allclose(compiled.distance[hit], numpy.distance[hit], rtol=0, atol=10 * tol)
+    assert np.mean(np.abs(compiled.distance[hit] - numpy.distance[hit]) <= 1e-13) > 0.999
+    # the normal then from points a step apart (a³ < tol·a_prev², a_prev <= 1 cm: a < 1e-5 m) times the
+    # wall's curvature (rough: ~10 /m)
+    np.testing.assert_allclose(compiled.normal[hit], numpy.normal[hit], rtol=0, atol=10 * (tol * 1e-4) ** (1 / 3))
+    assert np.mean(np.abs(compiled.normal[hit] - numpy.normal[hit]).max(axis=1) <= 1e-12) > 0.999
     np.testing.assert_allclose(compiled.albedo[hit], numpy.albedo[hit], rtol=0, atol=0)
-    # and the refinement moved the hits off the tessellation: the distance along the ray is ~0
+    # and the refinement moved the hits off the tessellation onto the surface: iterated to a µm step,
+    # (nearly) every hit is within a nm (two fixed steps left 12-15 % of the rough walls' hits off by more;
+    # what is left is grazing rays that keep their mesh hit)
     q = t.query(o[hit] + compiled.distance[hit, None] * d[hit])
-    assert np.median(np.abs(q.distance)) < 1e-9
+    assert np.median(np.abs(q.distance)) < 1e-12
+    assert np.mean(np.abs(q.distance) < 1e-9) > 0.99
+
+
+@pytest.mark.parametrize("kind", ["moulin", "rough_tube"])
+def test_beyond_the_wall_is_the_sign_of_the_terrains_distance(kind):
+    """The test that tells a hit only blocks (from r_s alone, skipping the modes where Σ|A_j| cannot
+    reach) is the sign of the terrain's own distance, on the s-table and off it."""
+    t = terrain(KINDS[kind])
+    rng = np.random.default_rng(4)
+    shaft = getattr(t, "shaft", t)
+    refiner = FourierRefiner.for_terrain(t, shaft.origin + np.outer([-5.0, 0.0], shaft.R[:, 2]), margin=1.0)
+    for span in [(-6.0, 1.0), (-9.0, -6.5)]:
+        p = points_near_the_wall(t, 4000, span, rng)
+        far = points_near_the_wall(t, 1000, span, rng)
+        far = shaft.origin + (far - shaft.origin) * rng.uniform(0.0, 2.0, (len(far), 1))   # axis to 2 radii out
+        p = np.vstack([p, far])
+        if kind == "moulin":
+            p[::7, 2] = rng.uniform(-0.05, 0.3, len(p[::7]))     # about and above the ice surface
+        q = t.query(p).distance
+        clear = np.abs(q) > 1e-12                            # off the surface by more than rounding
+        inside = refiner.beyond_wall(p)
+        np.testing.assert_array_equal(inside[clear], q[clear] < 0)
+        assert 0.2 < inside.mean() < 0.8                  # both sides sampled
+
+
+def test_hits_that_only_block_are_kept_and_the_rest_refined_as_before():
+    """refine_beyond (a lidar's minimum range): a mesh hit nearer than it, on a ray inside the
+    terrain there, keeps its mesh distance; every other hit is refined exactly as without it, so
+    which hits lie nearer than refine_beyond does not change."""
+    t = terrain(KINDS["moulin"])
+    world = world_at(t, all_links_at(np.array([0.3, 0.0, -2.0])), extent=8.0)     # 20 cm from the wall
+    rng = np.random.default_rng(5)
+    d = rng.normal(size=(30000, 3))
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    o = np.broadcast_to([0.3, 0.0, -2.0], d.shape)
+    near = 0.3
+    exact = world.cast(o, d, 20.0).distance.copy()
+    mesh = world.cast_from(np.eye(3), np.zeros(3), o, d, 20.0, exact=False)[0].distance.copy()
+    cut = world.cast_from(np.eye(3), np.zeros(3), o, d, 20.0, refine_beyond=near)[0].distance
+    kept = cut != exact
+    assert kept.sum() > 1000                                  # the rays that see the wall within 30 cm
+    np.testing.assert_array_equal(cut[kept], mesh[kept])
+    assert np.all(cut[kept] < near) and np.all(exact[kept] < near)
+    np.testing.assert_array_equal(cut < near, exact < near)
 
 
 def test_other_kinds_keep_the_numpy_iteration():

@@ -76,6 +76,8 @@ def world():
 @pytest.mark.parametrize("threads", [1, 2])
 def test_a_lidar_bundle_gives_the_hits_of_one_posed_scene(world, threads, monkeypatch):
     monkeypatch.setattr(rc, "THREADS", threads)
+    monkeypatch.setattr(rc, "CAST_CHUNK_MIN", 2048)         # 12k rays: split into chunks on two threads
+    monkeypatch.setattr(rc, "CHUNK_MIN", 2048)
     head = world.link_poses[ROBOT.link_index("head"), :3]
     d = sphere_directions()
     rng = np.random.default_rng(1)
@@ -112,9 +114,11 @@ def test_any_rays_without_a_bundle(world):
     assert n_robot > 1000
 
 
-def test_bundle_candidates_hold_every_ray_that_meets_a_links_sphere(world):
-    """The direction bins and cones only leave out rays that cannot meet a link: what they keep
-    contains what the exact segment–sphere test keeps, for each link."""
+def test_bundle_link_rays_hold_every_ray_that_meets_a_links_sphere_and_box(world):
+    """The direction bins, cones and box test only leave out rays that cannot meet a link: what
+    they keep contains every ray whose segment meets both the link's sphere (the exact segment–
+    sphere test) and its box within range, moved into the link's frame as Rᵀ(o − p), Rᵀd, with
+    the box entry distance of the slab test."""
     rob = world.robot
     d = sphere_directions(64, 512)
     rng = np.random.default_rng(3)
@@ -130,36 +134,58 @@ def test_bundle_candidates_hold_every_ray_that_meets_a_links_sphere(world):
     p = p5 + R5 @ side
     assert np.linalg.norm(side - rob.centre[k5]) < rob.radius[k5]
     o_w, d_w = p + o_s @ R.T, d @ R.T
+    lo = 1e-3
     centres = world.spheres()[0]
-    offsets, rays = bundle.candidates(R, p, centres, rob.radius, MAX_RANGE, [0, len(d)])
-    exact_off, exact = link_candidates(o_w, d_w, 0.0, np.full(len(d), MAX_RANGE, np.float32), centres, rob.radius,
-                                       np.array([0, len(rob.rows)]), centres.mean(axis=0, keepdims=True),
+    exact_off, exact = link_candidates(o_w, d_w, lo, np.full(len(d), MAX_RANGE - lo, np.float32), centres,
+                                       rob.radius, np.array([0, len(rob.rows)]), centres.mean(axis=0, keepdims=True),
                                        np.array([1e9]))
-    total = 0
-    for k in range(len(rob.rows)):
-        want = set(exact[exact_off[k]:exact_off[k + 1]].tolist())
-        got = set(rays[offsets[k]:offsets[k + 1]].tolist())
-        assert want <= got, (k, len(want - got))
-        total += len(want)
-    assert total > 1000
-    # with the links' boxes: every ray that meets both a link's box and sphere within range is kept
     rows = rob.rows
-    offsets_b, rays_b = bundle.candidates(R, p, centres, rob.radius, MAX_RANGE, [0, len(d)], world.rotations[rows],
-                                          world.link_poses[rows, :3], rob.boxes)
-    for k, row in enumerate(rows):
-        Rl, pl = world.link_pose(row)
-        s, v = (o_w - pl) @ Rl, d_w @ Rl                      # link frame
-        lo, hi = rob.box[k]
+    links = np.arange(len(rows))[::-1].copy()              # any order: the output follows it
+    offsets, count, ids, o_l, d_l, entry = bundle.link_rays(R, p, centres, rob.radius, MAX_RANGE, world.rotations[rows],
+                                                            world.link_poses[rows, :3], rob.boxes, links, lo)
+    total = 0
+    for j, k in enumerate(links):
+        Rl, pl = world.link_pose(rows[k])
+        s, v = (o_w + lo * d_w - pl) @ Rl, d_w @ Rl                      # link frame
+        box_lo, box_hi = rob.box[k]
         with np.errstate(divide="ignore", invalid="ignore"):
-            ta, tb = (lo - s) / v, (hi - s) / v
+            ta, tb = (box_lo - s) / v, (box_hi - s) / v
         t0 = np.nanmax(np.where(np.isnan(np.minimum(ta, tb)), -np.inf, np.minimum(ta, tb)), axis=1)
         t1 = np.nanmin(np.where(np.isnan(np.maximum(ta, tb)), np.inf, np.maximum(ta, tb)), axis=1)
-        meets = set(np.flatnonzero(np.maximum(t0, 0) <= np.minimum(t1, MAX_RANGE)).tolist())
+        meets = set(np.flatnonzero(np.maximum(t0, 0) <= np.minimum(t1, MAX_RANGE - lo)).tolist())
         meets &= set(exact[exact_off[k]:exact_off[k + 1]].tolist())
-        got = set(rays_b[offsets_b[k]:offsets_b[k + 1]].tolist())
-        assert meets <= got, (k, len(meets - got))
+        sl = slice(offsets[j], offsets[j] + count[j])
+        got = ids[sl]
+        assert meets <= set(got.tolist()), (k, len(meets - set(got.tolist())))
+        total += len(meets)
+        # the kept rays in the link frame, to float32 rounding of the link-frame coordinates
+        np.testing.assert_allclose(o_l[sl], s[got], rtol=0, atol=4 * F32 * (1 + np.abs(s[got]).max(initial=0)))
+        np.testing.assert_allclose(d_l[sl], v[got], rtol=0, atol=4 * F32)
+        np.testing.assert_allclose(entry[sl], np.maximum(t0[got], 0), rtol=1e-6, atol=1e-6)
+    assert total > 1000
     # the box culls where the sphere cannot (the sphere holds the origin: every ray)
-    assert np.diff(offsets)[k5] == len(d) and np.diff(offsets_b)[k5] < 0.6 * len(d)
+    assert count[list(links).index(k5)] < 0.6 * len(d)
+
+
+def test_a_bundle_fixed_to_a_link_takes_its_hits_on_that_link_cast_once(world):
+    """A lidar inside its housing link: the housing's hits are cast once in the link frame and
+    must be those of one posed scene, whatever the link's pose; posing the bundle anywhere but
+    its mount is an error."""
+    row = ROBOT.link_index("module_03")
+    k = int(np.flatnonzero(world.robot.rows == row)[0])
+    R_ls = Rotation.from_rotvec([0.2, -0.1, 0.3]).as_matrix()
+    p_ls = world.robot.centre[k] + [0.01, 0.003, -0.002]               # inside the link's box
+    d = sphere_directions(32, 128)
+    o_s = np.zeros_like(d)
+    bundle = RayBundle(o_s, d, mount=(row, R_ls, p_ls))
+    for seed in (0, 1):                            # the same bundle at two poses of the robot
+        w = world_at(terrain({"kind": "plane", "origin": (0.0, 0.0, -0.3)}), bent_poses(seed), robot_visible=True)
+        R_wl, p_wl = w.link_pose(row)
+        hits, o_w, d_w = w.cast_from(R_wl @ R_ls, p_wl + R_wl @ p_ls, o_s, d, MAX_RANGE, 1e-6, bundle)
+        _, n_robot = compare(hits, *reference(w, o_w, d_w, 1e-6, MAX_RANGE), o_w)
+        assert np.count_nonzero(hits.link == row) > 100 and n_robot > 100
+    with pytest.raises(ValueError, match="mount pose"):
+        w.cast_from(R_wl @ R_ls, p_wl + R_wl @ p_ls + [0.0, 0.0, 0.01], o_s, d, MAX_RANGE, 1e-6, bundle)
 
 
 def test_buffers_are_reused_without_leaking_the_previous_cast(world):
@@ -188,6 +214,7 @@ def test_casts_work_in_a_forked_child(world, monkeypatch):
     import multiprocessing
 
     monkeypatch.setattr(rc, "THREADS", 2)
+    monkeypatch.setattr(rc, "CHUNK_MIN", 4096)
     d = sphere_directions(64, 512)
     here = world.cast(np.zeros_like(d), d, MAX_RANGE).distance               # the parent's pool exists
     ctx = multiprocessing.get_context("fork")
