@@ -11,8 +11,9 @@ time, and whether the run completed.
                                       [--method ros2] [--jacobian-every N] [--dense] [--dt 0.001]
                                       [--duration 2] [--repeats 2] [--accuracy SECONDS] [--json FILE]
 
-Each row also times MuJoCo's screw snake with as many modules in this process
-(../shared/peers/mujoco_snake.py; bench/mujoco_anchor.py) and prints the ratio, the
+Each row also times MuJoCo's screw snake with as many modules in this process, one MuJoCo run
+after each timed snakesim run (../shared/peers/mujoco_snake.py; bench/interleaved.py: wall clock and
+CPU time), and prints the ratio per pair (median [min]), the
 process's peak resident memory (``peak_rss_mb``: rows run in ascending module count), and
 the peak of ``snakesim check --modules N`` in a child process of its own
 (``check_peak_mb``, the child's own VmHWM). Issue 13's target: ≤ 1 GB at 100 modules.
@@ -52,7 +53,7 @@ import click  # noqa: E402
 from snakesim.framework.session import load_session  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from mujoco_anchor import mujoco_rtf  # noqa: E402
+from interleaved import compare  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "validation"))
 from validation_scenes import session  # noqa: E402
@@ -76,17 +77,38 @@ def check_peak_mb(modules: int) -> float | None:
     return float(lines[-1].split()[1]) / 1024.0
 
 
+def _one_run(s):
+    gc.collect()
+    gc.disable()
+    try:
+        return s.run().summary
+    finally:
+        gc.enable()
+
+
 def _best_run(s, repeats):
     s.run()         # warm-up
     best = None
     for _ in range(repeats):
-        gc.collect()
-        gc.disable()
-        r = s.run()
-        gc.enable()
-        if best is None or r.summary["wall_time_s"] < best["wall_time_s"]:
-            best = r.summary
+        r = _one_run(s)
+        if best is None or r["wall_time_s"] < best["wall_time_s"]:
+            best = r
     return best
+
+
+def _interleaved_runs(s, modules, dt, duration, repeats):
+    """``repeats`` runs of the session, each followed by MuJoCo's snake with as many modules (Euler at
+    min(dt, 2 ms), min(duration, 2) s; bench/interleaved.py): (fastest run's summary, the comparison)."""
+    s.run()         # warm-up
+    summaries = []
+
+    def one():
+        summaries.append(_one_run(s))
+        return summaries[-1]
+
+    cmp = compare(one, modules=modules, mujoco_dt=dt if dt <= 2e-3 else 2e-3, mujoco_duration=min(duration, 2.0),
+                  repeats=repeats)
+    return min(summaries, key=lambda r: r["wall_time_s"]), cmp
 
 
 def scene_row(modules: int, integrator: str, dt: float, duration: float, repeats: int, params: dict,
@@ -96,7 +118,7 @@ def scene_row(modules: int, integrator: str, dt: float, duration: float, repeats
                      sim_overrides={"duration": duration, "integrator": {"name": integrator, "params": params},
                                     "dt": dt})
     build = time.perf_counter() - t0
-    best = _best_run(s, repeats)
+    best, cmp = _interleaved_runs(s, modules, dt, duration, repeats)
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
     nv = s.plan.components["robot"].dyn.model.nv
     del s
@@ -119,7 +141,9 @@ def scene_row(modules: int, integrator: str, dt: float, duration: float, repeats
             "completed": best["completed"], "target_rtf": TARGETS.get(modules), "dense_lu_rtf": dense_rtf,
             "peak_rss_mb": peak,
             "check_peak_mb": check_peak_mb(modules),
-            "mujoco_rtf": mujoco_rtf(modules, dt if dt <= 2e-3 else 2e-3, duration=min(duration, 2.0))}
+            "real_time_factor_cpu": cmp["snakesim_rtf_cpu_best"],
+            "mujoco_rtf": cmp.get("mujoco_rtf_wall_best"), "x_mujoco_wall": cmp.get("ratio_wall"),
+            "x_mujoco_cpu": cmp.get("ratio_cpu"), "interleaved": cmp["repeats"]}
 
 
 ACCURACY_SETS = ["settle=0.5", "phase=1.5"]      # the schedule compressed: drive, turn, stop from 8 s
@@ -154,28 +178,35 @@ def accuracy_row(modules: int, integrator: str, dt: float, params: dict, horizon
 @click.option("--accuracy", type=float, default=None,
               help="also the tail error against rk4 at 0.25 ms over this many seconds of the compressed "
                    "schedule (settle 0.5, phases 1.5 s), per module count")
-@click.option("--json", "json_path", type=click.Path(dir_okay=False), help="write the figures here")
+@click.option("--json", "json_path", type=click.Path(dir_okay=False), default="bench/results/scaling.json",
+              show_default=True, help="write the figures here (machine-readable)")
 def main(modules, integrator, dt, duration, repeats, method, jacobian_every, dense, accuracy, json_path):
     params = {"method": method} if method else {}
     if jacobian_every:
         params["jacobian_every"] = jacobian_every
+    elif integrator == "rosenbrock_w":      # explicit: the scene's own params merge under the override
+        params["jacobian_every"] = 1
     rows = [scene_row(int(m), integrator, dt, duration, repeats, params, dense)
             for m in sorted(map(int, modules.split(",")))]
     print(f"{SCENE}, {integrator}{params or ''} at dt = {dt * 1e3:g} ms, {duration:g} s simulated, best of {repeats}")
     print("MuJoCo: its screw snake with as many modules, timed in this process (Euler at min(dt, 2 ms));\n"
           "peak MB: the process's peak so far (rows run in ascending module count, so a row's figure is its own\n"
           "peak unless an earlier row's was higher); check MB: `snakesim check --modules N`'s peak, its own process")
-    print(f"{'modules':>7s} {'nv':>5s} {'build s':>8s} {'wall s':>8s} {'us/step':>9s} {'RTF':>7s} {'target':>7s} "
-          f"{'MuJoCo':>7s} {'ratio':>6s} {'peak MB':>8s} {'check MB':>8s}")
+    print("RTF: the fastest of the runs by the wall clock (CPU: by process CPU time); ratio: RTF / MuJoCo's RTF per\n"
+          "interleaved pair (each run followed by a MuJoCo run), median [min], wall clock and CPU time")
+    print(f"{'modules':>7s} {'nv':>5s} {'build s':>8s} {'wall s':>8s} {'us/step':>9s} {'RTF':>7s} {'RTF CPU':>7s} "
+          f"{'target':>7s} {'MuJoCo':>7s} {'ratio wall':>13s} {'ratio CPU':>13s} {'peak MB':>8s} {'check MB':>8s}")
     for r in rows:
         tgt = f"{r['target_rtf']:g}" if r["target_rtf"] else "-"
         flag = "" if r["completed"] else "  (did not complete)"
         if r["target_rtf"] and r["real_time_factor"] < r["target_rtf"]:
             flag += "  (below target)"
         mj = r["mujoco_rtf"]
-        mjs, ratio = (f"{mj:7.2f}", f"{r['real_time_factor'] / mj:6.2f}") if mj else (f"{'-':>7s}", f"{'-':>6s}")
+        fmt = lambda x: f"{x['median']:.2f} [{x['min']:.2f}]" if x else "-"  # noqa: E731
+        mjs = f"{mj:7.2f}" if mj else f"{'-':>7s}"
         print(f"{r['modules']:7d} {r['nv']:5d} {r['build_s']:8.2f} {r['wall_time_s']:8.3f} {r['us_per_step']:9.1f} "
-              f"{r['real_time_factor']:7.2f} {tgt:>7s} {mjs} {ratio} {r['peak_rss_mb']:8.0f} "
+              f"{r['real_time_factor']:7.2f} {r['real_time_factor_cpu']:7.2f} {tgt:>7s} {mjs} "
+              f"{fmt(r['x_mujoco_wall']):>13s} {fmt(r['x_mujoco_cpu']):>13s} {r['peak_rss_mb']:8.0f} "
               f"{r['check_peak_mb'] or float('nan'):8.0f}{flag}")
         if r["dense_lu_rtf"]:
             print(f"{'':7s} previous path (Pinocchio ABA, CRBA + dense LU in the implicit step), this process: "

@@ -11,6 +11,8 @@ rear screw's inertia folded in, the optimised model; `mimic_crba` = the pair kep
 constraint solved through the CRBA, the unoptimised path) — it runs the scene and reports:
 
   wall s, RTF     wall time of the run (the fastest of --repeats identical runs) and simulated / wall time
+  x MuJoCo        RTF / MuJoCo's RTF, per interleaved pair (each snakesim run followed by a MuJoCo run,
+                  bench/interleaved.py): median [min] by the wall clock and by CPU time
   pos err m       max over time of |tail (x, y) − reference| (traverse) or |CoM − reference| (walls)
   yaw err rad     max over time of |tail yaw − reference| (traverse; the fig. 14 quantities)
   stable          no non-finite-state or integrator-failure stop (the framework's stop;
@@ -18,8 +20,8 @@ constraint solved through the CRBA, the unoptimised path) — it runs the scene 
                   monitor) is compared up to the earlier of its end and the reference's.
 
 The reference is the same scene at rk4, dt = 0.25 ms (tests/validation/validation_scenes.py),
-cached under bench/results/. MuJoCo's screw snake (../shared/peers/mujoco_snake.py) is timed in
-the same process first; "x MuJoCo" is each row's RTF over MuJoCo's at 1 ms. Then the held-robot
+computed in the same run. MuJoCo's 10-module screw snake (../shared/peers/mujoco_snake.py, Euler at
+1 ms) is timed in the same process after each of a setting's runs. Then the held-robot
 cases (bench/held_cases.py: a held pair on a slope, the default scene's stop phase, the walls
 hold) with each setting's creep error against a converged reference (--no-held skips them). `--quick`: traverse 2 s (compressed schedule), walls 1.5 s and a
 reduced set of settings (a few minutes); full: 45 s traverse, 4 s walls, every setting.
@@ -40,11 +42,11 @@ import click  # noqa: E402
 import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "validation"))
-from validation_scenes import REFERENCE, run, track_error  # noqa: E402
+from validation_scenes import REFERENCE, run, session, track_error  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import held_cases  # noqa: E402
-from mujoco_anchor import mujoco_rtf  # noqa: E402
+from interleaved import available, compare  # noqa: E402
 
 
 def _track(result, scene):
@@ -85,9 +87,12 @@ def _patch(contact_type=None, per_ring=None, screw_pairs=None):
 
 def settings(quick: bool):
     out = []
-    I = lambda name, dt, **p: {"label": f"{name} dt={dt:g}" + "".join(  # noqa: E731
-        f" {k}={v:g}" if isinstance(v, (int, float)) else f" {k}={v}" for k, v in p.items()),
-        "integrator": {"name": name, "params": p}, "dt": dt}
+    def I(name, dt, **p):  # noqa: E743
+        if name == "rosenbrock_w":      # always explicit: the scene's own params merge under the override
+            p.setdefault("jacobian_every", 1)
+        return {"label": f"{name} dt={dt:g}" + "".join(
+            f" {k}={v:g}" if isinstance(v, (int, float)) else f" {k}={v}" for k, v in p.items()),
+            "integrator": {"name": name, "params": p}, "dt": dt}
     steps = {"rk4": [5e-4, 1e-3, 2e-3] if quick else [5e-4, 1e-3, 2e-3, 4e-3],
              "semi_implicit_euler": [2.5e-4, 5e-4, 1e-3] if quick else [1e-4, 2.5e-4, 5e-4, 1e-3, 2e-3],
              "rosenbrock2": [2e-3] if quick else [1e-3, 2e-3, 5e-3]}
@@ -97,8 +102,20 @@ def settings(quick: bool):
     # the linearly implicit step on the components' analytic Jacobians (framework/linearization.py)
     for dt in ([5e-3, 1e-2] if quick else [2.5e-3, 5e-3, 1e-2]):
         out.append(I("rosenbrock_w", dt, method="ros2"))
-    for every in (2, 3, 5):         # the Jacobian (and its O(links) factorisation) reused for a few steps
+    for every in (2, 3, 4, 5):      # the Jacobian (and its O(links) factorisation) reused for a few steps
         out.append(I("rosenbrock_w", 5e-3, method="ros2", jacobian_every=every))
+    out.append(I("rosenbrock_w", 2.5e-3, method="ros2", jacobian_every=3))     # the default scene's setting
+    for every in (1, 2):            # 1/150 s: the largest step under 10 ms that divides the 50 Hz record
+        out.append(I("rosenbrock_w", 1.0 / 150.0, method="ros2", jacobian_every=every))
+    # J refreshed at the schedule's set-point jumps and for 50 ms after (jacobian_refresh: on_sources), else
+    # every 8 steps: a stale J costs accuracy only where the friction's slip regime changes
+    for dt in (5e-3, 1.0 / 150.0):
+        out.append(I("rosenbrock_w", dt, method="ros2", jacobian_every=8, jacobian_refresh="on_sources",
+                     refresh_window=0.05))
+    # ... and the transient after each jump at a quarter of the step (refresh_substeps: 4) for 100 ms
+    for dt in (5e-3, 1.0 / 150.0, 1e-2):
+        out.append(I("rosenbrock_w", dt, method="ros2", jacobian_every=8, jacobian_refresh="on_sources",
+                     refresh_window=0.1, refresh_substeps=4))
     for dt in ([1e-2] if quick else [5e-3, 1e-2]):
         out.append(I("rosenbrock_w", dt, method="ros34pw2"))
     if not quick:
@@ -121,25 +138,36 @@ SCENES = {  # scene -> (--set items, quick horizon, full horizon)
 
 
 def measure(scene, sets, horizon, s, repeats=1):
-    """One setting's run; with ``repeats`` > 1 the fastest of that many identical runs (the same result:
-    the runs are deterministic) is kept, so a load spike on a shared machine does not set its speed."""
+    """One setting: its session built once and run ``repeats`` times (deterministic: the same result), each
+    run followed by a run of MuJoCo's 10-module snake (bench/interleaved.py), both timed by the wall clock
+    and by CPU time. Speed: the fastest run (RTF) and, per interleaved pair, the ratio to MuJoCo."""
     sim = {"duration": horizon, "dt": s["dt"], "integrator": s["integrator"]}
-    r = None
-    for _ in range(repeats):
-        try:
-            sess, ri = run(scene, sets, sim, _patch(**s.get("patch", {})))
-        except Exception as e:                      # a setting the build rejects (e.g. a record rate)
-            return {"error": f"{type(e).__name__}: {e}"}
-        if r is None or ri.summary["wall_time_s"] < r.summary["wall_time_s"]:
-            r = ri
+    try:
+        sess = session(scene, sets, sim, _patch(**s.get("patch", {})))
+    except Exception as e:                      # a setting the build rejects (e.g. a record rate)
+        return {"error": f"{type(e).__name__}: {e}"}
+    last = []
+
+    def one():
+        r = sess.run()
+        last[:] = [r]
+        return r.summary
+
+    cmp = compare(one, modules=10, mujoco_dt=1e-3, mujoco_duration=5.0, repeats=repeats)
+    r = last[0]
     sm = r.summary
-    return {"result": r, "wall_s": sm["wall_time_s"], "rtf": sm["real_time_factor"], "sim_s": sm["sim_time_s"],
+    best = min(cmp["repeats"], key=lambda x: x["snakesim_wall_s"])
+    return {"result": r, "wall_s": best["snakesim_wall_s"], "rtf": cmp["snakesim_rtf_wall_best"],
+            "rtf_cpu": cmp["snakesim_rtf_cpu_best"], "sim_s": sm["sim_time_s"],
+            "x_mujoco_wall": cmp.get("ratio_wall"), "x_mujoco_cpu": cmp.get("ratio_cpu"),
+            "mujoco_rtf_wall": [x.get("mujoco_rtf_wall") for x in cmp["repeats"]],
             "stable": r.last_good_state is None, "stop": sm["stop_reason"]}
 
 
 @click.command()
 @click.option("--quick", is_flag=True, help="Shorter horizons, fewer settings (a few minutes).")
-@click.option("--json", "json_path", type=click.Path(dir_okay=False), help="Write the figures here.")
+@click.option("--json", "json_path", type=click.Path(dir_okay=False), default="bench/results/tradeoff.json",
+              show_default=True, help="Write the figures here (machine-readable).")
 @click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default="bench/results/tradeoff.png",
               show_default=True, help="Pareto plot (PNG).")
 @click.option("--scene", "only", multiple=True, help="Only these scenes.")
@@ -147,19 +175,21 @@ def measure(scene, sets, horizon, s, repeats=1):
               help="Also the held-robot cases (bench/held_cases.py: slope, stop phase, walls) with creep errors.")
 @click.option("--match", multiple=True, help="Only the settings whose label contains one of these texts "
                                              "(e.g. --match rosenbrock_w); the held cases are not filtered.")
-@click.option("--repeats", default=1, show_default=True,
-              help="Runs per setting, the fastest kept; MuJoCo then reports its fastest of as many 3-run medians.")
+@click.option("--repeats", default=3, show_default=True,
+              help="Runs per setting, each followed by a MuJoCo run (interleaved pairs); the fastest RTF is kept.")
 def main(quick, json_path, plot_path, only, held, match, repeats):
     rows = []
-    # the same run's speed anchor; with repeats, each side's fastest, so that a load spike favours neither
-    mj = {dt: max((mujoco_rtf(10, dt) for _ in range(repeats)), default=None, key=lambda v: v or 0.0)
-          for dt in (1e-3, 2e-3)}
-    if mj[1e-3] is not None:
-        print(f"MuJoCo screw snake (10 modules, Euler), this run: RTF {mj[1e-3]:.3g} at 1 ms, {mj[2e-3]:.3g} at 2 ms"
-              " (../shared/peers/mujoco_snake.py); 'x MuJoCo' below is RTF / MuJoCo's RTF at 1 ms")
+    if available():
+        print("Speed: each setting's session is run --repeats times, each run followed by MuJoCo's 10-module screw "
+              "snake\n(Euler, 1 ms, 5 s; ../shared/peers/mujoco_snake.py) in this process (bench/interleaved.py). "
+              "'x MuJoCo' = RTF / MuJoCo's RTF per pair:\nwall clock median [min], and by CPU time "
+              "(process_time: what other processes take of the core does not count) median [min].")
     else:
         print("MuJoCo not available (pip install mujoco): no speed ratio")
-    ratio = (lambda rtf: f"{rtf / mj[1e-3]:.2f}") if mj[1e-3] else (lambda rtf: "—")
+
+    def ratio(row, clock):
+        r = row.get(f"x_mujoco_{clock}")
+        return f"{r['median']:.2f} [{r['min']:.2f}]" if r else "—"
     for scene, (sets, qh, fh) in SCENES.items():
         if only and scene not in only:
             continue
@@ -175,27 +205,28 @@ def main(quick, json_path, plot_path, only, held, match, repeats):
         chosen = [st for st in settings(quick) if not match or any(m in st["label"] for m in match)]
         for name in dict.fromkeys(st["integrator"]["name"] for st in chosen):   # load each one's kernels
             run(scene, sets, {"duration": 0.05, "dt": 5e-3, "integrator": {"name": name, "params": {}}})
-        print("| setting | wall s | RTF | x MuJoCo | pos err m | yaw err rad | stable | stop |\n"
-              "|---|---:|---:|---:|---:|---:|---|---|")
+        print("| setting | wall s | RTF | x MuJoCo wall | x MuJoCo CPU | pos err m | yaw err rad | stable | stop |\n"
+              "|---|---:|---:|---:|---:|---:|---:|---|---|")
         for s in chosen:
             m = measure(scene, sets, horizon, s, repeats)
             row = {"scene": scene, "setting": s["label"], "horizon_s": horizon}
             if "error" in m:
                 row.update(error=m["error"], stable=False)
-                print(f"| {s['label']} | — | — | — | — | — | build error | {m['error'][:60]} |")
+                print(f"| {s['label']} | — | — | — | — | — | — | build error | {m['error'][:60]} |")
             else:
                 t, p, yaw = _track(m.pop("result"), scene)
                 row.update(m, **_errors(t, p, yaw, t_ref, p_ref))
                 ye = "—" if row["yaw_err_rad"] is None else f"{row['yaw_err_rad']:.2e}"
-                print(f"| {s['label']} | {row['wall_s']:.2f} | {row['rtf']:.3g} | {ratio(row['rtf'])} | "
-                      f"{row['pos_err_m']:.2e} | {ye} | "
+                print(f"| {s['label']} | {row['wall_s']:.2f} | {row['rtf']:.3g} | {ratio(row, 'wall')} | "
+                      f"{ratio(row, 'cpu')} | {row['pos_err_m']:.2e} | {ye} | "
                       f"{'yes' if row['stable'] else 'NO'} | {row['stop'][:60]} |", flush=True)
             rows.append(row)
     held_rows = held_cases.main(quick) if held else []
     if json_path:
         Path(json_path).parent.mkdir(parents=True, exist_ok=True)
-        Path(json_path).write_text(json.dumps({"quick": quick, "reference": REFERENCE, "mujoco_rtf": mj, "rows": rows,
-                                               "held": held_rows}, indent=1) + "\n")
+        Path(json_path).write_text(json.dumps({"quick": quick, "reference": REFERENCE, "repeats": repeats,
+                                               "rows": rows, "held": held_rows}, indent=1) + "\n")
+        print(f"\nwrote {json_path}")
     if plot_path:
         plot(rows, Path(plot_path))
         print(f"\nwrote {plot_path}")

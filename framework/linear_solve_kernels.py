@@ -6,7 +6,16 @@ second-order states; an owner is the slice [q0, q0 + nv) (its q tangent) followe
 
 from __future__ import annotations
 
+import functools
+
 from numba import njit
+
+
+def bind(kernel, *args):
+    """``kernel`` compiled once for these arguments' types; a call without arguments (no per-call typing).
+    For arrays and numbers fixed for as long as the call is kept."""
+    entry = kernel.compile(tuple(kernel.typeof_pyval(a) for a in args))
+    return functools.partial(entry, *args)
 
 
 @njit(cache=True)
@@ -159,3 +168,11 @@ def first_order_share(r, owned, Dinv, c, q0, nv, gf_r, gf_c, gf_v, p_r, p_c, p_v
         z[i] *= Dinv[i]
     for k in range(gf_r.size):
         rhs[gf_r[k]] += c * gf_v[k] * z[gf_c[k]]
+
+
+@njit(cache=True)
+def first_order_rhs(r, owned, Dinv, c, q0, nv, gf_r, gf_c, gf_v, p_r, p_c, p_v, z, rhs):
+    """rhs = c G_F D (r_F + c P_q r_q) (:func:`first_order_share` into a zeroed rhs)."""
+    for i in range(rhs.size):
+        rhs[i] = 0.0
+    first_order_share(r, owned, Dinv, c, q0, nv, gf_r, gf_c, gf_v, p_r, p_c, p_v, z, rhs)

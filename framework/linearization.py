@@ -53,6 +53,7 @@ diagonal e, and when it is not diagonal the owner's dense blocks are asked for i
 
 from __future__ import annotations
 
+import functools
 import operator
 from dataclasses import dataclass
 
@@ -165,6 +166,10 @@ class Linearization:
         self.stats = {"assemblies": 0}
         self.gamma_hint = None         # the integrator's γ, for messages (c = γh)
         self._dinv_at = (None, None)   # (c, d) of the last Dinv
+        self._rhs: dict = {}           # q0 -> an owner's right-hand-side scratch (kept: bound solves read it)
+        self._extra: dict = {}         # q0 -> an owner's first-order diagonal share (kept: operators bind to it)
+        self._solve_key = object()     # replaced when a factorisation changes what a bound solve holds
+        self._solve_parts = None
 
     # -- what components ask ---------------------------------------------------------------------
     def source(self, comp, port: str):
@@ -304,12 +309,19 @@ class Linearization:
             q0 = s.dx.start
             GF = mech.GF if mech.GF is not None else _EMPTY
             if mech.structured is not None:
-                extra = np.empty(nv)
+                extra = self._extra.get(q0)
+                if extra is None or extra.size != nv:
+                    extra = self._extra[q0] = np.empty(nv)     # kept: the operator may bind to it
                 if kern.reduced_diagonal(extra, c, q0, nv, self.Dinv, GF.rows, GF.cols, GF.vals, self._p_ptr,
                                          P.cols, P.vals):
                     if not mech.structured.factor(c, extra):
                         raise self._singular(s, c)
-                    self.blocks.append((True, q0, nv, mech.structured, GF, None, None, np.zeros(nv)))
+                    rhs = self._rhs.get(q0)
+                    if rhs is None or rhs.size != nv:
+                        rhs = self._rhs[q0] = np.zeros(nv)
+                    elif not GF.rows.size:
+                        rhs[:] = 0.0                    # solve() writes it only when there is a share
+                    self.blocks.append((True, q0, nv, mech.structured, GF, None, None, rhs))
                     continue
             M, Gq, Gv = mech.blocks()
             lu, piv = np.empty((nv, nv)), np.empty(nv, np.int64)
@@ -320,6 +332,41 @@ class Linearization:
             self.blocks.append((False, q0, nv, (M, Gq), GF, lu, piv, np.empty(nv)))
         if not hasattr(self, "_z"):
             self._z = np.empty(self.ndx)
+        parts = (c, self.Dinv, P, tuple((b[0], b[3], b[4], b[5], b[7]) for b in self.blocks))
+        last = self._solve_parts
+        if last is None or last[0] != c or any(a is not b for a, b in zip(last[1:3], parts[1:3])) or \
+                len(last[3]) != len(parts[3]) or \
+                any(a is not b for x, y in zip(last[3], parts[3]) for a, b in zip(x, y)):
+            self._solve_key, self._solve_parts = object(), parts
+
+    def bind_solve(self, r: np.ndarray, out: np.ndarray):
+        """:meth:`solve` (r, out) for arrays fixed for a run (an integrator's work arrays): a call without
+        arguments. Owners with a structured operator that binds (``bind_solve_into``) and the
+        first-order states' kernels are bound to r, out and the factorisation's arrays once per change of
+        them (a new c, new declarations), so a call costs a few bound kernel calls; otherwise it is
+        ``solve(r, out)``. The same arithmetic either way."""
+        held = [None, ()]
+
+        def solve():
+            if held[0] is not self._solve_key:
+                held[0], held[1] = self._solve_key, self._bound_solve(r, out)
+            for call in held[1]:
+                call()
+        return solve
+
+    def _bound_solve(self, r, out) -> tuple:
+        c, Dinv, P, z, owned = self.c, self.Dinv, self.P, self._z, self._owned
+        calls = []
+        for tree, q0, nv, op, GF, lu, piv, rhs in self.blocks:
+            if not tree or not hasattr(op, "bind_solve_into"):
+                return (functools.partial(self.solve, r, out),)
+            if GF.rows.size:
+                calls.append(kern.bind(kern.first_order_rhs, r, owned, Dinv, float(c), q0, nv, GF.rows, GF.cols,
+                                       GF.vals, P.rows, P.cols, P.vals, z, rhs))
+            calls.append(op.bind_solve_into(r, out, q0, c, rhs))
+        if self.F.size:
+            calls.append(kern.bind(kern.first_order_solve, r, out, owned, Dinv, float(c), P.rows, P.cols, P.vals, z))
+        return tuple(calls)
 
     def _singular(self, s, c) -> FloatingPointError:
         return FloatingPointError(f"{s.comp.name}: the implicit step's matrix M − γh∂Q/∂v − (γh)²∂Q/∂q is "

@@ -18,6 +18,7 @@ output never creates an algebraic loop.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from collections import defaultdict
 from dataclasses import dataclass, field
@@ -122,19 +123,32 @@ class Plan:
         plan's X): a call without arguments, its views made once."""
         e = self.n_euclid_x
         xe, dxe, oe = X[:e], dX[:e], out[:e]
-        parts = tuple((s.comp.integrate, X[s.x], dX[s.dx], out[s.x]) for s in self._manifold)
+        # a component may bind its map to the views itself (``bind_integrate``: e.g. a compiled kernel)
+        parts = tuple(s.comp.bind_integrate(X[s.x], dX[s.dx], out[s.x]) if hasattr(s.comp, "bind_integrate")
+                      else functools.partial(s.comp.integrate, X[s.x], dX[s.dx], out[s.x]) for s in self._manifold)
         add = np.add
 
         def integrate():
             add(xe, dxe, out=oe)
-            for fn, x, dx, o in parts:
-                fn(x, dx, o)
+            for fn in parts:
+                fn()
         return integrate
 
     def dexp_inv(self, X0: np.ndarray, dX: np.ndarray, K: np.ndarray) -> None:
         """Munthe-Kaas correction of a stage derivative K taken at X0 ⊕ dX (manifold states only)."""
         for s in self._lie:
             s.comp.dexp_inv(X0[s.x], dX[s.dx], K[s.dx])
+
+    def bind_dexp_inv(self, X0: np.ndarray, dX: np.ndarray, K: np.ndarray):
+        """``dexp_inv(X0, dX, K)`` for buffers fixed for a run: a call without arguments (as
+        :meth:`bind_integrate`; a component's ``bind_dexp_inv`` is used where it has one)."""
+        parts = tuple(s.comp.bind_dexp_inv(X0[s.x], dX[s.dx], K[s.dx]) if hasattr(s.comp, "bind_dexp_inv")
+                      else functools.partial(s.comp.dexp_inv, X0[s.x], dX[s.dx], K[s.dx]) for s in self._lie)
+
+        def dexp_inv():
+            for fn in parts:
+                fn()
+        return dexp_inv
 
     def second_order_pairs(self) -> list[tuple[slice, slice]]:
         """(position-tangent slice, velocity slice) in DX for each [q, v] state."""

@@ -31,9 +31,10 @@ K, C, MU, EV_A, EV_B = range(5)
 
 
 @njit(cache=True)
-def point_jacobian(depth, n, v, e, stiffness, damping, mu, ev_a, ev_b, v_eps, mode, ev_floor, Dv, Dp, W):
+def point_jacobian(depth, n, v, e, stiffness, damping, mu, ev_a, ev_b, v_eps, mode, ev_floor, Dv, Dp, W, gk):
     """∂F/∂v (3×3) into Dv and ∂F/∂p_s into Dp at one point (see the module docstring); W is (3, 3, 3)
-    scratch. No allocation."""
+    scratch. Dp = g ⊗ (−k n̂) is rank one: g·(−k) goes into gk (3) for :func:`add_lever_rank1`. Returns
+    False when the point pushes no force (F_n = 0: Dv and Dp are zero). No allocation."""
     vn = v[0] * n[0] + v[1] * n[1] + v[2] * n[2]
     raw = stiffness * depth - damping * vn
     fn = raw if (depth > 0.0 and raw > 0.0) else 0.0
@@ -85,6 +86,8 @@ def point_jacobian(depth, n, v, e, stiffness, damping, mu, ev_a, ev_b, v_eps, mo
         for j in range(3):
             Dv[i, j] = gi * cd * n[j] - mf * (B[i, j] - bn * n[j])       # A ∂s/∂t (I − n nᵀ)
             Dp[i, j] = gi * ck * n[j]
+    gk[0], gk[1], gk[2] = g0 * ck, g1 * ck, g2 * ck
+    return fn > 0.0
 
 
 @njit(cache=True)
@@ -136,6 +139,20 @@ def add_lever_quadratic(r, D, out):
 
 
 @njit(cache=True)
+def add_lever_rank1(r, g, m, out):
+    """out += (Xᵀ g)(Xᵀ m)ᵀ = Xᵀ (g mᵀ) X for X = [I, L], L = −[r]×: :func:`add_lever_quadratic` of a
+    rank-one D = g mᵀ (the depth derivative, g ⊗ (−k n̂)) in 36 products instead of ~90. No allocation."""
+    g0, g1, g2, m0, m1, m2 = g[0], g[1], g[2], m[0], m[1], m[2]
+    # Lᵀ g = [r]× g = r × g
+    a = (g0, g1, g2, r[1] * g2 - r[2] * g1, r[2] * g0 - r[0] * g2, r[0] * g1 - r[1] * g0)
+    b = (m0, m1, m2, r[1] * m2 - r[2] * m1, r[2] * m0 - r[0] * m2, r[0] * m1 - r[1] * m0)
+    for i in range(6):
+        ai = a[i]
+        for j in range(6):
+            out[i, j] += ai * b[j]
+
+
+@njit(cache=True)
 def _clear_marked(d_twist, d_pose, on_link):
     """Zero the blocks of the links marked in on_link (the last evaluation's) and unmark them."""
     for i in range(on_link.size):
@@ -161,6 +178,7 @@ def contact_jacobian_blocks(m, distance, normal, material, owner, point, vel, po
     rc = np.empty(3)
     nrm = np.empty(3)
     vv = np.empty(3)
+    gk = np.empty(3)
     count = 0
     last = -1                  # rows come grouped by screw: its axis and thread once per screw
     o = 0
@@ -196,10 +214,10 @@ def contact_jacobian_blocks(m, distance, normal, material, owner, point, vel, po
         cx, cy, cz = a1 * u2 - a2 * u1, a2 * u0 - a0 * u2, a0 * u1 - a1 * u0
         e[0], e[1], e[2] = cl * a0 - sl * cx, cl * a1 - sl * cy, cl * a2 - sl * cz
         mat = material[i]
-        point_jacobian(d, nrm, vv, e, mats[mat, K], mats[mat, C], mats[mat, MU], mats[mat, EV_A], mats[mat, EV_B],
-                       v_eps, mode, ev_floor, Dv, Dp, W)
-        add_lever_quadratic(rc, Dv, d_twist[o])
-        add_lever_quadratic(rc, Dp, d_pose[o])
+        if point_jacobian(d, nrm, vv, e, mats[mat, K], mats[mat, C], mats[mat, MU], mats[mat, EV_A],
+                          mats[mat, EV_B], v_eps, mode, ev_floor, Dv, Dp, W, gk):
+            add_lever_quadratic(rc, Dv, d_twist[o])
+            add_lever_rank1(rc, gk, nrm, d_pose[o])           # X_cᵀ (gk ⊗ n̂) X_c
         if not on_link[o]:
             on_link[o] = True
             count += 1
@@ -223,6 +241,7 @@ def body_jacobian_blocks(m, distance, normal, material, sample, owner, point, ve
     rc = np.empty(3)
     nrm = np.empty(3)
     vv = np.empty(3)
+    gk = np.empty(3)
     count = 0
     for i in range(m):
         d = -distance[i]
@@ -243,10 +262,10 @@ def body_jacobian_blocks(m, distance, normal, material, sample, owner, point, ve
             vv[j] = vel[i, j]
             rc[j] = point[i, j] - poses[b, j]
         mat = material[i]
-        point_jacobian(d, nrm, vv, e, mats[mat, K], mats[mat, C], mats[mat, MU] * mu_scale[k], skin_ratio[k], 0.0,
-                       v_eps, mode, ev_floor, Dv, Dp, W)
-        add_lever_quadratic(rc, Dv, d_twist[b])
-        add_lever_quadratic(rc, Dp, d_pose[b])
+        if point_jacobian(d, nrm, vv, e, mats[mat, K], mats[mat, C], mats[mat, MU] * mu_scale[k], skin_ratio[k],
+                          0.0, v_eps, mode, ev_floor, Dv, Dp, W, gk):
+            add_lever_quadratic(rc, Dv, d_twist[b])
+            add_lever_rank1(rc, gk, nrm, d_pose[b])
         if not on_link[b]:
             on_link[b] = True
             count += 1

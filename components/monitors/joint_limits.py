@@ -1,11 +1,14 @@
-"""Joints past their URDF position limits: a watch, since the multibody models no joint stops.
+"""Joints past their URDF position limits: a watch.
 
-The multibody integrates the joint angles freely (no end stops); a controller or a placement that asks
-for more than the hardware can bend gets it silently. This monitor compares the DOF joint angles with the
-URDF's <limit lower upper> (continuous joints have none) at its ``rate`` and reports each joint that went
-past a limit by more than ``tolerance``, with its worst angle (``report()``: ``summary.json`` under
-``reports/<name>``, printed by ``snakesim run``); with ``stop_on_violation`` the run ends there, naming
-the joint, angle and limit::
+Unless its ``joint_stops`` are enabled (components/multibody/joint_stops.py) the multibody integrates the
+joint angles freely; a controller or a placement that asks for more than the hardware can bend gets it
+silently. With stops on, a joint still goes past its limit by the stop's compliance (τ / k: give
+``tolerance`` the stops' penetration at full effort) or by a placement that starts it there.
+
+This monitor compares the DOF joint angles with the URDF's <limit lower upper> (continuous joints have
+none) at its ``rate`` and reports each joint that went past a limit by more than ``tolerance``, with its
+worst angle (``report()``: ``summary.json`` under ``reports/<name>``, printed by ``snakesim run``); with
+``stop_on_violation`` the run ends there, naming the joint, angle and limit::
 
     excess_j = max(q_j − upper_j, lower_j − q_j, 0)      (rad)
 
@@ -74,7 +77,7 @@ class JointLimits(Component[JointLimitsParams]):
             w.first = (t, self.robot.joints[j], float(q[j]))
             if self.p.stop_on_violation:
                 self.stop(f"joint {self.robot.joints[j]} at {q[j]:.4g} rad is past its limits "
-                          f"[{self._lo[j]:.4g}, {self._hi[j]:.4g}] rad (the multibody models no joint stops)")
+                          f"[{self._lo[j]:.4g}, {self._hi[j]:.4g}] rad (joint stops off, or overpowered)")
 
     # -- the run's report (framework/run_reports.py) -------------------------------------------
     def report(self, cache, summary: dict) -> dict:
@@ -100,4 +103,4 @@ class JointLimits(Component[JointLimitsParams]):
                           if v["lower_rad"] == -v["upper_rad"] else
                           f"{k} {math.degrees(v['angle_rad']):.1f} deg (limits {math.degrees(v['lower_rad']):.1f}, "
                           f"{math.degrees(v['upper_rad']):.1f})" for k, v in list(r["past_limits"].items())[:4])
-        return [f"joints past their URDF limits (no joint stops are modelled): {worst}"]
+        return [f"joints past their URDF limits (joint stops off, or overpowered): {worst}"]

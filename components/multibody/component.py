@@ -56,13 +56,18 @@ twist, screw, other); ``armature: {"*": 0}`` removes it (what another engine rea
 the same URDF simulates). ``snakesim check`` prints each value and
 its source.
 
+Joint stops (``joint_stops: {enabled: true}``, off by default): a one-sided spring-damper past each
+limited joint's URDF position limits, added to the generalised force before the forward dynamics,
+its slopes in the implicit step's Jacobian (joint_stops.py).
+
 Links (nl) are the URDF's <link> elements in document order, massless
 frames included; DOF joints (nj) the moving joints that are not mimics, in
 URDF order (``robot.links`` and ``robot.joints``; with the usual
 parents-first URDF, v[6:] is in that order too).
 
 Integration: ``integrate`` is pin.integrate (the quaternion and the (cos, sin)
-of continuous joints stay on their manifolds). ``dexp_inv`` is the
+of continuous joints stay on their manifolds), in numba (lie_kernels.py: the same
+operations, bit for bit in tests, without Python's per-call conversion). ``dexp_inv`` is the
 Munthe-Kaas stage correction the framework's multi-stage integrators (RK4,
 DOPRI5, ROS2) apply so they keep their order on SE(3) (see
 tests/multibody/test_conservation.py).
@@ -91,7 +96,10 @@ from pydantic import Field
 from snakesim.framework import Component, ContinuousState, Input, Output, Provides
 
 from . import joint_values
+from ..kernel_args import bind
 from ..port_roles import JOINT_POSITIONS, JOINT_VELOCITIES, JOINT_WRENCHES, LINK_POSES, LINK_VELOCITIES
+from .joint_stops import JointStopsParams, build as build_joint_stops
+from .lie_kernels import dexp_inv6, integrate_state, joint_layout
 from .linearization import mechanical_block
 from .robot_model import RobotModel, RobotSource
 
@@ -121,6 +129,8 @@ class MultibodyParams(RobotSource):
         "auto", description="forward dynamics: 'tree' the articulated-body recursion on the link tree "
                             "(no Pinocchio Data: O(nv³) bytes), 'pinocchio' its ABA; auto: tree unless "
                             "screw_pairs is mimic_crba")
+    joint_stops: JointStopsParams = Field(default_factory=JointStopsParams,
+                                          description="end stops at the URDF position limits (joint_stops.py)")
 
 
 def _names(suffixes):
@@ -225,6 +235,8 @@ class Multibody(Component[MultibodyParams]):
         self._report = None
         self._selections = None
         self._x0 = joint_values.initial_state(robot, p, model)   # validated here, so errors name the component
+        self._lie = joint_layout(model)          # integrate's joint layout (None: a joint lie_kernels lacks)
+        self._stops = build_joint_stops(self, p.joint_stops)     # None when off
 
     def joint_inertia(self) -> np.ndarray:
         """Apparent inertia of each DOF joint (robot.joints order) at the initial state, 1 / (M⁻¹)_ii with
@@ -239,8 +251,17 @@ class Multibody(Component[MultibodyParams]):
 
     def integrate(self, x, dx, out):
         nq = self._nq
-        out[:nq] = self._pin.integrate(self.dyn.model, x[:nq], dx[:self._nv])
-        np.add(x[nq:], dx[self._nv:], out=out[nq:])
+        if self._lie is None:
+            out[:nq] = self._pin.integrate(self.dyn.model, x[:nq], dx[:self._nv])
+            np.add(x[nq:], dx[self._nv:], out=out[nq:])
+        else:                               # Pinocchio's integrate, in numba (lie_kernels.py)
+            integrate_state(x, dx, out, nq, self._nv, *self._lie)
+
+    def bind_integrate(self, x, dx, out):
+        """integrate(x, dx, out) for arrays fixed for a run: a call without arguments (plan.bind_integrate)."""
+        if self._lie is None:
+            return functools.partial(self.integrate, x, dx, out)
+        return bind(integrate_state, x, dx, out, self._nq, self._nv, *self._lie)
 
     def dexp_inv(self, x0, u, k):
         """RKMK hook: ``k`` (a derivative evaluated at x0 ⊕ u) -> the rate of u in the chart at x0, in place.
@@ -253,8 +274,11 @@ class Multibody(Component[MultibodyParams]):
         on the manifold only with this correction (Munthe-Kaas); without it
         classical RK4 is second order in the free-flyer's orientation.
         """
-        pin = self._pin
-        k[:6] = pin.Jlog6(pin.exp6(u[:6])) @ k[:6]          # Jexp6(u)⁻¹ = Jlog6(exp6(u))
+        dexp_inv6(u, k)         # Jexp6(u)⁻¹ = Jlog6(exp6(u)), Pinocchio's closed form in numba (lie_kernels.py)
+
+    def bind_dexp_inv(self, x0, u, k):
+        """dexp_inv(x0, u, k) for arrays fixed for a run: a call without arguments (plan.bind_dexp_inv)."""
+        return bind(dexp_inv6, u, k)
 
     # -- this run's cache -----------------------------------------------------------------------
     def make_cache(self, x, u, y):
@@ -277,6 +301,8 @@ class Multibody(Component[MultibodyParams]):
             raise _not_the_state(self.name)
         if c.force():
             c.model.gravity.linear[:] = c.g
+        if self._stops is not None:                 # joint stops past the URDF limits (joint_stops.py)
+            self._stops.apply(c.q, c.v, c.T)
         c.a = a = c.solve()                         # derivative() reads it
         if c.want_acc:
             c.qdd[:] = a
@@ -291,6 +317,10 @@ class Multibody(Component[MultibodyParams]):
             sel = self._selections = {"joint_q": Selection(self._dof_v), "joint_v": Selection(self._nv + self._dof_v),
                                       "v": Selection(self._nv + np.arange(self._nv))}
         return sel.get(port)
+
+    def stiffness_hint(self, u, readers):
+        """The joint stops' modes (joint_stops.py), none when off."""
+        return self._stops.hint() if self._stops is not None else []
 
     def mechanical_jacobian(self, t, x, u, y, lin):
         """M and ∂Q/∂(q, v, other states) from the torque and wrench inputs' sources (linearization.py)."""
@@ -358,7 +388,7 @@ class _Cache:
 
     __slots__ = ("x", "q", "v", "a", "qdd", "g", "vv", "fresh", "model", "want_acc", "kin", "ports", "state", "force",
                  "solve", "accelerations", "momentum", "energy", "ensure_kinematics", "lin_scratch", "frames", "lin_tau",
-                 "lin_op")
+                 "lin_op", "T", "solved")
 
     def __init__(self, mb: Multibody, x, u, y):
         from . import kernels as k
@@ -370,7 +400,8 @@ class _Cache:
         self.x, self.q, self.v = x, q, v
         self.a = self.qdd = np.zeros(nv)      # a: the last solve's accelerations; qdd: the kernels' copy
         self.g = mb._g_param.copy()
-        self.vv, T = np.zeros(nv), np.zeros(nv)
+        self.vv, self.T = np.zeros(nv), np.zeros(nv)      # T: the generalised force (kernels.force_step)
+        T = self.T
         self.model = model = mb._pin.Model(mb.dyn.model)          # its gravity is this run's
         self.want_acc = bool(used & {"a", "link_accelerations", "joint_wrenches"})
         z3 = lambda: np.zeros((nl, 3))  # noqa: E731
@@ -394,9 +425,15 @@ class _Cache:
         self.lin_scratch = np.zeros((nl, 6, 6))          # composite blocks (linearization.tree_quadratic)
         self.lin_tau = None                                # (torque input's Coo, its slopes: linearization.py)
         self.lin_op = None                                 # the link-tree operator (linearization.ArticulatedW)
+        self.solved = None                                 # (Iin, sig, at_q, q) of the tree solve, when it is one
         if mb.forward_dynamics == "tree":
             from .articulated_solve_kernels import forward_step, tree_dynamics
-            self.solve = bind(forward_step, mb._tree, self.kin, tree_dynamics(mb._ta, nv, mb._arm_v, mb._tree_plan))
+            # the solve's link inertias and joint twists, and the q they belong to: the implicit step's
+            # assembly reuses them (linearization.ArticulatedW.prepare)
+            Iin, sig, at_q = np.zeros((nl, 6, 6)), np.zeros((nl, 6)), np.full(nq, np.nan)
+            self.solved = (Iin, sig, at_q, q)
+            self.solve = bind(forward_step, mb._tree, self.kin,
+                              tree_dynamics(mb._ta, nv, mb._arm_v, mb._tree_plan, Iin, sig, at_q))
         elif mb.mode != "mimic_crba":
             self.solve = functools.partial(mb._pin.aba, model, mb.dyn.data, q, v, T)
         else:

@@ -63,10 +63,16 @@ def forward_kinematics(order, parent, jtype, R0, p0, axis, qidx, qkind, vidx, mu
             thd[l] = 0.0
             continue
         P = parent[l]
-        # joint frame in the world
+        # joint frame in the world (a joint origin without rotation, the usual case, is the parent's axes)
+        r0 = R0[l]
+        same = (r0[0, 0] == 1.0 and r0[1, 1] == 1.0 and r0[2, 2] == 1.0 and r0[0, 1] == 0.0 and r0[0, 2] == 0.0
+                and r0[1, 0] == 0.0 and r0[1, 2] == 0.0 and r0[2, 0] == 0.0 and r0[2, 1] == 0.0)
         for i in range(3):
-            for j in range(3):
-                rj[i, j] = R[P, i, 0] * R0[l, 0, j] + R[P, i, 1] * R0[l, 1, j] + R[P, i, 2] * R0[l, 2, j]
+            if same:
+                rj[i, 0], rj[i, 1], rj[i, 2] = R[P, i, 0], R[P, i, 1], R[P, i, 2]
+            else:
+                for j in range(3):
+                    rj[i, j] = R[P, i, 0] * r0[0, j] + R[P, i, 1] * r0[1, j] + R[P, i, 2] * r0[2, j]
             p[l, i] = p[P, i] + R[P, i, 0] * p0[l, 0] + R[P, i, 1] * p0[l, 1] + R[P, i, 2] * p0[l, 2]
         r0, r1, r2 = p[l, 0] - p[P, 0], p[l, 1] - p[P, 1], p[l, 2] - p[P, 2]
         c0, c1, c2 = _cross(w[P, 0], w[P, 1], w[P, 2], r0, r1, r2)
@@ -79,19 +85,47 @@ def forward_kinematics(order, parent, jtype, R0, p0, axis, qidx, qkind, vidx, mu
                 aw[l, i] = 0.0
             thd[l] = 0.0
             continue
-        if qkind[l] == 0:
-            th = q[qidx[l]]
+        if qkind[l] != 0 and offset[l] == 0.0 and (mult[l] == 1.0 or mult[l] == -1.0):
+            # a continuous joint's (cos, sin), or its mirror for a −1 mimic: read, not atan2'd and rebuilt
+            c0, s0 = q[qidx[l]], q[qidx[l] + 1]
+            n = np.sqrt(c0 * c0 + s0 * s0)
+            c, s = c0 / n, mult[l] * s0 / n
         else:
-            th = np.arctan2(q[qidx[l] + 1], q[qidx[l]])
-        th = mult[l] * th + offset[l]
-        c, s = np.cos(th), np.sin(th)
+            th = q[qidx[l]] if qkind[l] == 0 else np.arctan2(q[qidx[l] + 1], q[qidx[l]])
+            th = mult[l] * th + offset[l]
+            c, s = np.cos(th), np.sin(th)
         ax, ay, az = axis[l, 0], axis[l, 1], axis[l, 2]
+        rate = mult[l] * v[vidx[l]]
+        thd[l] = rate
+        # R = rj rot(axis, θ); about a coordinate axis only two columns turn
+        if ay == 0.0 and az == 0.0 and ax == 1.0:
+            for i in range(3):
+                R[l, i, 0] = rj[i, 0]
+                R[l, i, 1] = rj[i, 1] * c + rj[i, 2] * s
+                R[l, i, 2] = rj[i, 2] * c - rj[i, 1] * s
+                aw[l, i] = rj[i, 0]
+                w[l, i] = w[P, i] + aw[l, i] * rate
+            continue
+        if ax == 0.0 and az == 0.0 and ay == 1.0:
+            for i in range(3):
+                R[l, i, 0] = rj[i, 0] * c - rj[i, 2] * s
+                R[l, i, 1] = rj[i, 1]
+                R[l, i, 2] = rj[i, 0] * s + rj[i, 2] * c
+                aw[l, i] = rj[i, 1]
+                w[l, i] = w[P, i] + aw[l, i] * rate
+            continue
+        if ax == 0.0 and ay == 0.0 and az == 1.0:
+            for i in range(3):
+                R[l, i, 0] = rj[i, 0] * c + rj[i, 1] * s
+                R[l, i, 1] = rj[i, 1] * c - rj[i, 0] * s
+                R[l, i, 2] = rj[i, 2]
+                aw[l, i] = rj[i, 2]
+                w[l, i] = w[P, i] + aw[l, i] * rate
+            continue
         t = 1.0 - c
         rot[0, 0], rot[0, 1], rot[0, 2] = c + t * ax * ax, t * ax * ay - s * az, t * ax * az + s * ay
         rot[1, 0], rot[1, 1], rot[1, 2] = t * ax * ay + s * az, c + t * ay * ay, t * ay * az - s * ax
         rot[2, 0], rot[2, 1], rot[2, 2] = t * ax * az - s * ay, t * ay * az + s * ax, c + t * az * az
-        rate = mult[l] * v[vidx[l]]
-        thd[l] = rate
         for i in range(3):
             for j in range(3):
                 R[l, i, j] = rj[i, 0] * rot[0, j] + rj[i, 1] * rot[1, j] + rj[i, 2] * rot[2, j]

@@ -38,8 +38,9 @@ from numba import njit
 
 from snakesim.framework.linearization import Coo, Elementwise, Mechanical
 
+from ..kernel_args import bind
 from . import articulated_solve_kernels as ask
-from .kernels import REVOLUTE, ROOT
+from .kernels import REVOLUTE, ROOT, _same_bits
 
 
 @dataclass(frozen=True)
@@ -156,14 +157,6 @@ def tree_quadratic(order, parent, jtype, vidx, mult, R, p, aw, rows, A, C, H):
 
 
 @njit(cache=True)
-def _joint_diagonal(arm, gv, gq, c, extra, d):
-    """d = arm − c gv − c² gq + extra, element by element in that order (one call, no temporaries)."""
-    c2 = c * c
-    for i in range(d.size):
-        d[i] = ((arm[i] - c * gv[i]) - c2 * gq[i]) + extra[i]
-
-
-@njit(cache=True)
 def symmetric_from_upper(src, out):
     """out = src with its strict lower triangle mirrored from the upper one (Pinocchio's CRBA fills
     the upper)."""
@@ -196,13 +189,16 @@ class ArticulatedW:
         self.pb, self.V, self.V2, self.F = np.zeros((nl, 6)), np.zeros((nl, 6)), np.zeros((nl, 6)), np.zeros((nl, 6))
         self.b = np.zeros(nv)
         self.done = np.zeros(nv, dtype=np.bool_)
-        self.gq = self.gv = np.zeros(nv)
-        self.R = None
+        # refreshed in place by prepare(), so a bound solve (bind_solve_into) keeps reading them
+        self.gq, self.gv = np.zeros(nv), np.zeros(nv)
+        self.R = np.zeros((nl, 3, 3))
 
-    def prepare(self, frames, terms, gq, gv) -> None:
+    def prepare(self, frames, terms, gq, gv, solved=None) -> None:
         """The state-dependent parts at the current kinematics: ``frames`` (R, p, aw of every link),
         ``terms`` the LinkWrenchJacobians reaching the wrench input, gq, gv the joint-diagonal
-        ∂τ/∂q, ∂τ/∂v (nv; joint damping included in gv)."""
+        ∂τ/∂q, ∂τ/∂v (nv; joint damping included in gv). ``solved``: (Iin, sig, at_q, q), the forward
+        dynamics' link inertias and joint twists and the configuration they were computed at: copied
+        instead of recomputed when at_q is q, bit for bit."""
         R, p, aw = frames
         ta = self.ta
         self.has_a[:] = False
@@ -217,20 +213,29 @@ class ArticulatedW:
                 atw[wj.rows] += wj.d_twist[wj.rows]
                 apo[wj.rows] += wj.d_pose[wj.rows]
                 self.has_a[wj.rows] = True
-        if self.R is None:
-            self.R = np.empty_like(R)
         np.copyto(self.R, R)        # the cache's frames move with every stage's evaluation; the factor stays
-        self.gq, self.gv = gq, gv
-        ask.prepare(ta.order, ta.jtype, ta.mult, ta.mass, ta.com, ta.inertia, R, p, aw, self.has_a, atw, apo,
-                    self.Iin, self.AtwO, self.ApO, self.sig)
+        np.copyto(self.gq, gq)
+        np.copyto(self.gv, gv)
+        if solved is not None and _same_bits(solved[2], solved[3]):
+            ask.prepare_from(ta.order, p, self.has_a, atw, apo, solved[0], solved[1], self.Iin, self.AtwO, self.ApO,
+                             self.sig)
+        else:
+            ask.prepare(ta.order, ta.jtype, ta.mult, ta.mass, ta.com, ta.inertia, R, p, aw, self.has_a, atw, apo,
+                        self.Iin, self.AtwO, self.ApO, self.sig)
 
     def factor(self, c: float, extra: np.ndarray) -> bool:
-        """Factorise M − c G_v − c² G_q + diag(extra); False if a pivot is zero."""
-        ta = self.ta
-        _joint_diagonal(self.arm, self.gv, self.gq, c, extra, self.d)
-        return ask.factor(ta.order, ta.parent, ta.jtype, ta.vidx, self.anc_ptr, self.anc_dof, self.R, self.Iin,
-                          self.AtwO, self.ApO, self.has_a, self.sig, c, self.d, self.Ia, self.Ucol, self.Urow, self.D,
-                          self.root_lu, self.root_piv)
+        """Factorise M − c G_v − c² G_q + diag(extra); False if a pivot is zero. Bound (one record) to this
+        c and extra array while they stay the same (a fixed step: the whole run)."""
+        bound = getattr(self, "_factor_bound", None)
+        if bound is None or bound[0] != c or bound[1] is not extra:
+            ta = self.ta
+            rec = ask.WFactor(order=ta.order, parent=ta.parent, jtype=ta.jtype, vidx=ta.vidx, anc_ptr=self.anc_ptr,
+                              anc_dof=self.anc_dof, R=self.R, Iin=self.Iin, AtwO=self.AtwO, ApO=self.ApO,
+                              has_a=self.has_a, sig=self.sig, c=float(c), arm=self.arm, gv=self.gv, gq=self.gq,
+                              extra=extra, d=self.d, Ia=self.Ia, Ucol=self.Ucol, Urow=self.Urow, D=self.D,
+                              root_lu=self.root_lu, root_piv=self.root_piv)
+            bound = self._factor_bound = (c, extra, bind(ask.factor_step, rec))
+        return bound[2]()
 
     def solve_into(self, r, out, q0, c, extra) -> None:
         """The owner's rows of (I − cJ)⁻¹ r into out (framework/linearization.py): rhs M r_v + c G_q r_q
@@ -239,6 +244,17 @@ class ArticulatedW:
         ask.rhs_solve(ta.order, ta.parent, ta.jtype, ta.vidx, self.anc_ptr, self.anc_dof, self.R, self.sig, self.Iin,
                       self.ApO, self.has_a, self.arm, self.gq, self.Ucol, self.Urow, self.D, self.root_lu,
                       self.root_piv, c, r, q0, extra, self.b, self.pb, self.V, self.V2, self.F, self.done, out)
+
+    def bind_solve_into(self, r, out, q0, c, extra):
+        """:meth:`solve_into` for arrays fixed for a run (an integrator's work arrays) and this ``c``: a
+        call without arguments (one record, no per-call argument typing: ~1 µs instead of ~6)."""
+        ta = self.ta
+        rec = ask.WSolve(order=ta.order, parent=ta.parent, jtype=ta.jtype, vidx=ta.vidx, anc_ptr=self.anc_ptr,
+                         anc_dof=self.anc_dof, R=self.R, sig=self.sig, Iin=self.Iin, ApO=self.ApO, has_a=self.has_a,
+                         arm=self.arm, gq=self.gq, Ucol=self.Ucol, Urow=self.Urow, D=self.D, root_lu=self.root_lu,
+                         root_piv=self.root_piv, c=float(c), r=r, q0=int(q0), extra=extra, b=self.b, pb=self.pb,
+                         V=self.V, V2=self.V2, F=self.F, done=self.done, out=out)
+        return bind(ask.rhs_solve_step, rec)
 
     def solve(self, b) -> None:
         """b ← (the factorised matrix)⁻¹ b."""
@@ -300,12 +316,14 @@ def mechanical_block(mb, t, x, u, y, lin):
     if c.lin_tau is None or c.lin_tau[0] is not tau:
         c.lin_tau = _torque_terms(mb, lin, tau)
     _, gq, gv, GF, dense = c.lin_tau
+    if mb._stops is not None:                           # pushing joint stops: −k, −c on the diagonal (joint_stops.py)
+        gq, gv, dense = mb._stops.slopes(c.q, c.v, c.a, lin.plan.dt, gq, gv, dense)
     terms = _link_wrench_terms(lin, mb, mb, "wrenches")
     c.ensure_kinematics()
     if dense is None and mb._tree_plan is not None and mb.structured_solve:
         if c.lin_op is None:
             c.lin_op = ArticulatedW(mb, mb._tree_plan)
-        c.lin_op.prepare(c.frames, terms, gq, gv)
+        c.lin_op.prepare(c.frames, terms, gq, gv, c.solved)
         return Mechanical(M=None, Gq=None, Gv=None, GF=GF, structured=c.lin_op)
     if mb.dyn.tree_mass_matrix is None:                 # Pinocchio's CRBA (it fills the upper triangle)
         M = np.empty((mb._nv, mb._nv))

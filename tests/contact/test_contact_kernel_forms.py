@@ -1,13 +1,14 @@
 """Hand-unrolled contact kernels against their plain definitions: the lever quadratic Xᵀ D X of a point
-derivative (jacobian_kernels.add_lever_quadratic) against the matrix product, and the max_depth watch's
-least distance (sdf_kernels.least_distance) against ``ndarray.min`` (NaN and no rows included)."""
+derivative (jacobian_kernels.add_lever_quadratic, and add_lever_rank1 for a rank-one D) against the matrix
+product, and the max_depth watch's least distance (sdf_kernels.least_distance) against ``ndarray.min`` (NaN
+and no rows included)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from snakesim.components.contact.jacobian_kernels import add_lever_quadratic
+from snakesim.components.contact.jacobian_kernels import add_lever_quadratic, add_lever_rank1
 from snakesim.components.contact.sdf_kernels import least_distance
 
 
@@ -28,6 +29,20 @@ def test_lever_quadratic_adds_xt_d_x(seed):
     want = X.T @ D @ X
     # round-off of a 3-term product on entries of size |D| |r|²
     np.testing.assert_allclose(out - before, want, rtol=0, atol=1e-12 * np.abs(D).max() * (1 + (r @ r)) + 1e-12)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_lever_rank1_adds_xt_g_mt_x(seed):
+    """The depth derivative g ⊗ m (rank one) through the lever: X^T (g m^T) X, as the plain product."""
+    rng = np.random.default_rng(10 + seed)
+    r, g, m = rng.normal(size=3) * 0.2, rng.normal(size=3), rng.normal(size=3) * 1e4
+    before = rng.normal(size=(6, 6))
+    out = before.copy()
+    add_lever_rank1(r, g, m, out)
+    X = _lever(r)
+    want = X.T @ np.outer(g, m) @ X
+    np.testing.assert_allclose(out - before, want, rtol=0,
+                               atol=1e-12 * np.abs(g).max() * np.abs(m).max() * (1 + (r @ r)) + 1e-12)
 
 
 def test_lever_quadratic_at_the_origin_is_d_in_the_force_block():

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 from pydantic import ValidationError
 
+from snakesim.framework import Component, Input, Output, Params
 from snakesim.framework.integrators.rosenbrock_w import ROS34PW2, RosenbrockW
 from snakesim.framework.linearization import Linearization, Mechanical
 from snakesim.framework.session import load_session
@@ -126,9 +127,145 @@ def test_structured_solve_equals_the_dense_one(tmp_path, reg):
     r, out = np.array([0.3, -1.1]), np.zeros(2)
     lin.solve(r, out)
     np.testing.assert_allclose(out, np.linalg.solve(np.eye(2) - 0.7 * J, r), rtol=1e-13)
+    bound_out = np.zeros(2)                 # the bound solve (integrators' work arrays): the same arithmetic
+    lin.bind_solve(r, bound_out)()
+    np.testing.assert_array_equal(bound_out, out)
 
 
-@pytest.mark.parametrize("params, key", [({"method": "ros3"}, "method"), ({"jacobian_every": 0}, "jacobian_every")])
+class LevelParams(Params):
+    times: list[float] = []
+    levels: list[float] = []
+
+
+class Level(Component[LevelParams]):
+    """A time-driven source (no inputs, no state): levels[k] from times[k] on, 0 before."""
+
+    type_name = "test_level"
+    Params = LevelParams
+    level = Output(unit="N", feedthrough=())
+
+    def output(self, t, x, u, y):
+        k = int(np.searchsorted(self.p.times, t, side="right"))
+        y.level[...] = self.p.levels[k - 1] if k else 0.0
+
+
+def _forced(base):
+    """The declaring oscillator with a force input: ẍ = −ω² x + F."""
+
+    class ForcedOscillator(base):
+        type_name = "test_forced_oscillator"
+        force = Input(unit="N")
+
+        def derivative(self, t, x, u, dx):
+            dx[0] = x[1]
+            dx[1] = -self.p.omega ** 2 * x[0] + u.force[()]
+
+    return ForcedOscillator
+
+
+def _assembly_steps(tmp_path, reg, monkeypatch, params, times, levels, dt=0.01, duration=0.5):
+    """Indices of the steps (t = k·dt) at which rosenbrock_w assembled J, and the run's stats."""
+    for cls in (Level, _forced(reg.component("test_declared_oscillator"))):
+        if cls.type_name not in reg.components:
+            reg.add_component(cls)
+    at = []
+    real = Linearization.assemble
+    monkeypatch.setattr(Linearization, "assemble", lambda self, t: (at.append(t), real(self, t))[1])
+    path = tmp_path / "forced.yaml"
+    path.write_text(f"""
+sim: {{duration: {duration!r}, dt: {dt!r}, integrator: {{name: rosenbrock_w, params: {json.dumps(params)}}}}}
+components:
+  src: {{type: test_level, params: {{times: {times}, levels: {levels}}}}}
+  osc: {{type: test_forced_oscillator, params: {{omega: 2.0, x0: 1.0, v0: 0.0}}}}
+connections: [src.level -> osc.force]
+record: [osc.x]
+""")
+    s = load_session(path, registry=reg)
+    r = s.run()
+    assert r.summary["completed"]
+    return [round(t / dt) for t in at], s.integrator.stats, [round(2 * t / dt) for t in at]
+
+
+def test_jacobian_refresh_on_sources_assembles_exactly_where_the_rule_says(tmp_path, reg, monkeypatch):
+    """jacobian_every 4, a source jumping at 0.105 s and 0.295 s (seen at the steps starting at 0.11 and
+    0.30), window 25 ms: J at steps 0, 4, 8 (every 4); 11 (the jump), 12, 13 (t < 0.135); 17, 21, 25, 29
+    (every 4 from 13); 30 (the jump), 31, 32 (t < 0.325); 36, 40, 44, 48. A source that keeps its level
+    (the third switch, to the same value) is no event."""
+    params = {"jacobian_every": 4, "jacobian_refresh": "on_sources", "refresh_window": 0.025}
+    steps, stats, _ = _assembly_steps(tmp_path, reg, monkeypatch, params, [0.105, 0.295, 0.42], [2.0, -1.0, -1.0])
+    assert steps == [0, 4, 8, 11, 12, 13, 17, 21, 25, 29, 30, 31, 32, 36, 40, 44, 48]
+    assert stats["source_refreshes"] == 2 and stats["jacobians"] == len(steps)
+    # refresh_substeps 2: the steps at the jump and in its window are halved, J assembled at each half
+    _, stats, halves = _assembly_steps(tmp_path, reg, monkeypatch, {**params, "refresh_substeps": 2},
+                                       [0.105, 0.295, 0.42], [2.0, -1.0, -1.0])
+    half = [0, 8, 16, 22, 23, 24, 25, 26, 27, 34, 42, 50, 58, 60, 61, 62, 63, 64, 65, 72, 80, 88, 96]
+    assert halves == half
+    assert stats["steps"] == 50 + 6 and stats["jacobians"] == len(half)
+    # the default rule ignores the source: every 4 steps
+    steps, _, _ = _assembly_steps(tmp_path, reg, monkeypatch, {"jacobian_every": 4}, [0.105, 0.3], [2.0, -1.0])
+    assert steps == list(range(0, 50, 4))
+
+
+class RampHoldParams(Params):
+    until: float = 0.5
+
+
+class RampHold(Component[RampHoldParams]):
+    """A time-driven source: min(t, until) (N), continuous, constant from ``until`` on."""
+
+    type_name = "test_ramp_hold"
+    Params = RampHoldParams
+    level = Output(unit="N", feedthrough=())
+
+    def output(self, t, x, u, y):
+        y.level[...] = min(t, self.p.until)
+
+
+@pytest.mark.parametrize("substeps", [1, 2])
+def test_refresh_on_sources_keeps_the_order(tmp_path, reg, substeps):
+    """A W-method's order holds for any matrix: with J refreshed at every step while the source ramps
+    (F = t) and every 3 steps once it holds (F = t0 from t0 = 0.5 s), ROS2 converges at order 2 to the
+    exact solution of ẍ = −ω² x + F (ω = 2): x = cos ωt − sin ωt/ω³ + t/ω² until t0, then the free
+    oscillation about t0/ω² from there. With refresh_substeps 2 the ramp's steps are halved, J at each half."""
+    omega, T, t0 = 2.0, 2.0, 0.5
+    for cls in (RampHold, _forced(reg.component("test_declared_oscillator"))):
+        if cls.type_name not in reg.components:
+            reg.add_component(cls)
+    c = 1 / omega ** 2
+    x0 = math.cos(omega * t0) - math.sin(omega * t0) / omega ** 3 + c * t0
+    v0 = -omega * math.sin(omega * t0) - math.cos(omega * t0) / omega ** 2 + c
+    errs, dts = [], (0.05, 0.025, 0.0125)
+    for dt in dts:
+        params = {"jacobian_every": 3, "jacobian_refresh": "on_sources", "refresh_window": 0.0,
+                  "refresh_substeps": substeps}
+        path = tmp_path / "ramp.yaml"
+        path.write_text(f"""
+sim: {{duration: {T!r}, dt: {dt!r}, integrator: {{name: rosenbrock_w, params: {json.dumps(params)}}}}}
+components:
+  src: {{type: test_ramp_hold, params: {{until: {t0}}}}}
+  osc: {{type: test_forced_oscillator, params: {{omega: {omega}, x0: 1.0, v0: 0.0}}}}
+connections: [src.level -> osc.force]
+record: [osc.x]
+""")
+        s = load_session(path, registry=reg)
+        r = s.run()
+        t, x = np.asarray(r["t"]), np.asarray(r["osc.x"])
+        exact = np.where(t <= t0, np.cos(omega * t) - np.sin(omega * t) / omega ** 3 + c * t,
+                         (x0 - c * t0) * np.cos(omega * (t - t0)) + v0 / omega * np.sin(omega * (t - t0)) + c * t0)
+        errs.append(np.abs(x - exact).max())
+        st = s.integrator.stats
+        k0, n = round(t0 / dt), round(T / dt)
+        assert st["source_refreshes"] == k0                         # one per step while it ramps (steps 1..k0)
+        assert st["jacobians"] == 1 + substeps * k0 + len(range(k0 + 3, n, 3))  # step 0, then every 3 once it holds
+        assert st["steps"] == n + (substeps - 1) * k0
+    slope = np.polyfit(np.log(dts), np.log(errs), 1)[0]
+    assert abs(slope - 2) < 0.3, (slope, errs)
+
+
+@pytest.mark.parametrize("params, key", [({"method": "ros3"}, "method"), ({"jacobian_every": 0}, "jacobian_every"),
+                                         ({"jacobian_refresh": "always"}, "jacobian_refresh"),
+                                         ({"refresh_window": -1.0}, "refresh_window"),
+                                         ({"refresh_substeps": 0}, "refresh_substeps")])
 def test_bad_params_name_the_key(params, key):
     with pytest.raises(ValidationError, match=key):
         RosenbrockW(params)

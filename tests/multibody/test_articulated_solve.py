@@ -219,6 +219,15 @@ def test_eels_tree_blocks_and_solve_match_the_dense_path(modules):
     mb.dyn.tree_mass_matrix = tree_m
     op = lins[True].mech[0][1].structured
     assert op.has_a.sum() >= modules                 # the screws are in contact: the blocks are there
+    # the link inertias and joint twists were the forward dynamics' (same configuration): as computed afresh
+    ta, nl = mb._ta, mb._ta.order.size
+    R, pos, aw = p.caches["robot"].frames
+    z = np.zeros((nl, 6, 6))
+    Iin, sig = np.zeros((nl, 6, 6)), np.zeros((nl, 6))
+    ask.prepare(ta.order, ta.jtype, ta.mult, ta.mass, ta.com, ta.inertia, R, pos, aw, np.zeros(nl, np.bool_), z, z,
+                Iin, z.copy(), z.copy(), sig)
+    np.testing.assert_array_equal(op.Iin, Iin)
+    np.testing.assert_array_equal(op.sig, sig)
     M1, Gq1, Gv1 = lins[True].mech[0][1].blocks()
     M0, Gq0, Gv0 = lins[False].mech[0][1].blocks()     # CRBA and the composite-rigid-body sums
     for a, b in ((M1, M0), (Gq1, Gq0), (Gv1, Gv0)):
@@ -244,6 +253,9 @@ def test_eels_tree_blocks_and_solve_match_the_dense_path(modules):
         lins[True].solve(r, o1)
         lins[False].solve(r, o0)
         assert np.abs(o1 - o0).max() <= max(1e-10, 1e-15 * cond) * np.abs(o0).max()
+        ob = np.zeros(p.ndx)                # bound to the arrays (the integrator's way): the same arithmetic
+        lins[True].bind_solve(r, ob)()
+        np.testing.assert_array_equal(ob, o1)
 
 
 def test_rosenbrock_run_is_the_same_with_the_tree_solve():
@@ -334,3 +346,31 @@ def test_first_order_share_as_a_diagonal():
     p_c2 = p_c.copy()
     p_c2[0] = q0 + 0                                                           # F_0 reads another joint
     assert not kern.reduced_diagonal(diag, c, q0, nv, Dinv, gf_r, gf_c, gf_v, p_ptr, p_c2, p_v)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_symmetric_factor_solves_the_mass_matrix(seed):
+    """factor_symmetric (the forward dynamics' elimination of M + diag(d) on upper triangles) solves M x = b
+    as the dense solve does, and as the general factor does."""
+    rng = np.random.default_rng(100 + seed)
+    t = random_tree(rng)
+    n, nv = t["order"].size, t["nv"]
+    O = t["p"][t["order"][0]]
+    J = link_jacobians(t)
+    d = np.zeros(nv)
+    d[6:] = rng.uniform(0.0, 0.3, nv - 6)
+    M = sum(J[l].T @ spatial_inertia_at(t, l, O) @ J[l] for l in range(n)) + np.diag(d)
+    op = TreeOp(t, np.zeros((n, 6, 6)), np.zeros((n, 6, 6)), np.zeros(n, np.bool_))
+    U, D, Ia = np.zeros((nv, 6)), np.zeros(nv), np.zeros((n, 6, 6))
+    lu, piv = np.zeros((6, 6)), np.zeros(6, np.int64)
+    assert ask.factor_symmetric(t["order"], t["parent"], t["jtype"], t["vidx"], op.ptr, op.dof, t["R"], op.Iin, op.sig,
+                                d, Ia, U, D, lu, piv)
+    for _ in range(3):
+        b = rng.standard_normal(nv)
+        x = b.copy()
+        ask.solve(t["order"], t["parent"], t["jtype"], t["vidx"], op.ptr, op.dof, t["R"], op.sig, U, U, D, lu, piv, x,
+                  op.s1, op.s2, np.zeros(nv, np.bool_))
+        x_ref = np.linalg.solve(M, b)
+        assert np.abs(x - x_ref).max() <= 1e-10 * np.abs(x_ref).max()
+        assert op.factor(0.0, d)
+        assert np.abs(op.solve(b) - x).max() <= 1e-12 * np.abs(x_ref).max()
