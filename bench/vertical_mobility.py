@@ -21,8 +21,10 @@ from snakesim.framework.session import load_session
 
 SCENES = ["walls-body-brace", "walls-body-brace-climb", "walls-body-brace-down", "walls-brace-climb",
           "walls-brace-climb-down", "walls-brace-climb-fail", "parallel-walls-climb", "tube-brace-descend",
-          "u-channel-brace-traverse"]
-PICTURES = ["walls-brace-climb", "walls-brace-climb-down", "walls-brace-climb-fail", "tube-brace-descend"]
+          "u-channel-brace-traverse", "u-channel-body-brace-traverse", "tube-body-brace", "moulin-brace-down",
+          "moulin-brace-down-inclined", "tube-body-brace-descend"]
+PICTURES = ["walls-brace-climb", "walls-brace-climb-down", "walls-brace-climb-fail", "tube-brace-descend",
+            "u-channel-body-brace-traverse", "tube-body-brace", "tube-body-brace-descend"]
 
 
 def measure(scene: str) -> tuple[dict, object, object]:
@@ -62,6 +64,12 @@ def draw(scene: str, s, r, out: Path) -> Path:
     if "walls" in str(gap):
         for y in (-0.175, 0.175):                                             # parallel-walls-0.35
             ax.plot_surface(xs, np.full_like(xs, y), zs, color="0.6", alpha=0.15)
+    elif "u-channel" in str(gap):                                             # its walls, above the floor's axis
+        from snakesim.components.terrain.spec import load_terrain
+        u = load_terrain(str(gap))
+        zw = np.maximum(zs, u.origin[2])
+        for y in (-u.width / 2, u.width / 2):
+            ax.plot_surface(xs, np.full_like(xs, y), zw, color="0.6", alpha=0.15)
     elif "tube" in str(gap):                                                  # a vertical tube about the z axis
         from snakesim.components.terrain.spec import load_terrain
         R = float(load_terrain(str(gap)).radius)
@@ -88,8 +96,15 @@ def draw(scene: str, s, r, out: Path) -> Path:
         ax3.plot(t, Fn[:, j], lw=0.8, label=f"screw {j} wall load")
     ax3.set_ylabel("N")
     ev = r.summary.get("reports", {}).get("evaluation", {})
-    ax2.set_title(f"hold {ev['hold']['longest_s']:.1f} s, up {ev['vertical_distance']['up_m']:.2f} m, "
-                  f"down {ev['vertical_distance']['down_m']:.2f} m; {r.summary['stop_reason']}"[:110], fontsize=8)
+    if "hold" in ev:
+        ax2.set_title(f"hold {ev['hold']['longest_s']:.1f} s, up {ev['vertical_distance']['up_m']:.2f} m, "
+                      f"down {ev['vertical_distance']['down_m']:.2f} m; {r.summary['stop_reason']}"[:110], fontsize=8)
+    else:                                                                     # a traverse_evaluation
+        x = P[:, names.index("tail"), 0]
+        ax2.plot(t, x - x[0], "b", lw=2, label="tail x − start (m, along the channel)")
+        ax2.set_title(f"traverse {ev['distance_m']:.2f} m, steady {ev['steady_speed_m_s']:.3f} m/s "
+                      f"({100 * ev.get('efficiency', float('nan')):.0f} % of {ev.get('reference_speed_m_s', 0):.3f}); "
+                      f"{r.summary['stop_reason']}"[:110], fontsize=8)
     h1, l1 = ax2.get_legend_handles_labels()
     h2, l2 = ax3.get_legend_handles_labels()
     ax2.legend(h1 + h2, l1 + l2, fontsize=6, loc="upper left")

@@ -5,7 +5,7 @@ material) over analytic shapes, obstacle fields, DEM height fields and imported 
     q = load_terrain("u-channel").query(points)     # points (n, 3)
 """
 
-from .analytic import FourierCylinder, Moulin, ParallelWalls, PlaneTerrain, UChannel
+from .analytic import FourierCylinder, Moulin, ParallelWalls, PlaneTerrain, SlotMoulin, UChannel
 from .base import Bounds, Material, Terrain, TerrainQuery
 from .dem import HeightField, fractal_heights
 from .mesh import SdfGrid, mesh_terrain
@@ -14,6 +14,6 @@ from .source import TerrainSource
 from .spec import available_terrains, build_terrain, load_terrain, validate_spec
 
 __all__ = ["Terrain", "TerrainQuery", "Material", "Bounds", "PlaneTerrain", "ParallelWalls", "UChannel",
-           "FourierCylinder", "Moulin", "ObstacleField", "Block", "Rock", "scatter_obstacles", "HeightField",
+           "FourierCylinder", "Moulin", "SlotMoulin", "ObstacleField", "Block", "Rock", "scatter_obstacles", "HeightField",
            "fractal_heights", "SdfGrid", "mesh_terrain",
            "TerrainSource", "load_terrain", "build_terrain", "validate_spec", "available_terrains"]

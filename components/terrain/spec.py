@@ -31,6 +31,7 @@ from importlib.resources import files
 from pathlib import Path
 from typing import Annotated, Literal, Union, get_args
 
+import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError, field_validator, model_validator
 
 from snakesim.components.materials import Material, material_from_mapping, read_material_file
@@ -125,14 +126,50 @@ class UChannelSpec(_Base):
     yaw: float = 0.0
 
 
+class CrossSectionSpec(_Model):
+    """A non-round moulin: a slot (analytic.SlotMoulin: flat walls 2b apart, half-round ends, exact distance)
+    or the superellipse |x/a|^p + |y/b|^p = 1 (analytic.superellipse_section, a Fourier cylinder)."""
+
+    shape: Literal["slot", "superellipse"] = Field("superellipse", description="slot | superellipse")
+    semi_axes: tuple[float, float] = Field(description="m: a along the slot (in the vertical plane of the "
+                                                       "heading), b across it")
+    exponent: float = Field(2.0, ge=2, description="superellipse: 2 ellipse, 4 or more a rounded slot")
+    max_order: int = Field(128, ge=2, le=512, description="highest angular order of the series")
+    tolerance: float = Field(1e-5, gt=0, description="m, largest allowed error of the series")
+
+    @field_validator("semi_axes")
+    @classmethod
+    def _positive(cls, v):
+        if not (v[0] > 0 and v[1] > 0):
+            raise ValueError(f"semi_axes = {list(v)}: both must be > 0 m")
+        return v
+
+
 class MoulinSpec(_Base):
     kind: Literal["moulin"]
-    radius: float = Field(gt=0, description="mean shaft radius at the surface, m")
+    radius: float | None = Field(None, gt=0, description="mean shaft radius at the surface, m (round shaft)")
+    cross_section: CrossSectionSpec | None = Field(None, description="a slot or elliptic shaft instead of radius")
     origin: Vec3 = Field((0.0, 0.0, 0.0), description="shaft axis at the ice surface")
-    slope: float = Field(0.0, description="dr/dz: > 0 narrows with depth")
+    inclination: float = Field(0.0, ge=0.0, lt=1.5707963267948966,
+                               description="rad of the shaft's axis from the vertical (0: a vertical shaft)")
+    heading: float = Field(0.0, description="rad, azimuth from +x towards which the shaft descends; the "
+                                            "cross-section's a axis lies in this vertical plane")
+    slope: float = Field(0.0, description="dr/ds along the shaft's upward axis: > 0 narrows with depth")
     roughness: RoughnessSpec = RoughnessSpec(rms=0.05, n_modes=24, wavelength_min=0.3, wavelength_max=5.0,
                                              m_min=0, m_max=5)
     surface: bool = True
+    meander: RoughnessSpec | None = Field(None, description="slot only: seeded sideways offset of the slot with "
+                                                            "depth (both walls move together; angular orders "
+                                                            "unused)")
+
+    @model_validator(mode="after")
+    def _one_shape(self):
+        if (self.radius is None) == (self.cross_section is None):
+            raise ValueError("give exactly one of 'radius' (a round shaft) or 'cross_section' "
+                             "({semi_axes: [a, b], exponent: p})")
+        if self.meander is not None and (self.cross_section is None or self.cross_section.shape != "slot"):
+            raise ValueError("'meander' needs cross_section: {shape: slot, ...}")
+        return self
 
 
 class FractalSpec(_Model):
@@ -397,8 +434,14 @@ def build_terrain(spec, base_dir: Path = Path("."), source: str = "<terrain>", n
         if spec.kind == "u_channel":
             return analytic.UChannel(spec.width, spec.origin, spec.yaw, **kw)
         if spec.kind == "moulin":
-            shaft = analytic.FourierCylinder(spec.radius, spec.origin, (0, 0, 1), spec.slope,
-                                             modes=spec.roughness.modes())
+            shaft = _moulin_shaft(spec)
+            if isinstance(shaft, tuple):                        # a slot: its own exact class
+                (a, b), axis, along = shaft
+                mz = spec.meander
+                meander = None if mz is None else analytic.fourier_modes(
+                    mz.seed, mz.n_modes, mz.rms, mz.wavelength_min, mz.wavelength_max, 0, 0, mz.hurst)
+                return analytic.SlotMoulin(a, b, spec.origin, axis, along, spec.slope, spec.roughness.modes(),
+                                           spec.surface, meander, **kw)
             return analytic.Moulin(shaft, spec.surface, **kw)
     except ValueError as e:
         raise ConfigError(str(e), source) from None
@@ -408,6 +451,26 @@ def build_terrain(spec, base_dir: Path = Path("."), source: str = "<terrain>", n
         return _build_dem(spec, base_dir, source, kw)
     return mesh.mesh_terrain(base_dir / spec.file, spec.cells, spec.resolution, spec.padding, spec.inside,
                              spec.open_surface, store=store, **kw)
+
+
+def _moulin_shaft(spec: MoulinSpec):
+    """The shaft: its axis (upward, tilted ``inclination`` away from the ``heading``), round or with the
+    cross-section's a axis in the heading's vertical plane (perpendicular to the axis). A slot: the tuple
+    ((a, b), axis, a axis) for analytic.SlotMoulin."""
+    si, ci, sh, ch = np.sin(spec.inclination), np.cos(spec.inclination), np.sin(spec.heading), np.cos(spec.heading)
+    axis = (-si * ch, -si * sh, ci)
+    if spec.cross_section is None:
+        return analytic.FourierCylinder(spec.radius, spec.origin, axis, spec.slope, modes=spec.roughness.modes())
+    x = spec.cross_section
+    R = analytic.frame_from_axis(axis)
+    along = np.array([ci * ch, ci * sh, si])                     # the a axis, ⟂ the shaft axis
+    if x.shape == "slot":
+        return x.semi_axes, axis, along
+    angle = float(np.arctan2(along @ R[:, 1], along @ R[:, 0]))
+    rho0, section, _ = analytic.superellipse_section(x.semi_axes[0], x.semi_axes[1], x.exponent, angle,
+                                                     x.max_order, x.tolerance)
+    return analytic.FourierCylinder(rho0, spec.origin, axis, spec.slope, modes=spec.roughness.modes(),
+                                    section=section)
 
 
 def _build_obstacles(spec: ObstaclesSpec, source: str, kw) -> Terrain:

@@ -39,6 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from snakesim.components.terrain import (Block, FourierCylinder, HeightField, Moulin, ObstacleField, ParallelWalls,
+                                         SlotMoulin,
                                          PlaneTerrain, Rock, SdfGrid, Terrain, UChannel)
 
 ICE = np.array([[214, 232, 244], [186, 212, 232]], dtype=np.uint8)   # checker tones, RGB
@@ -75,6 +76,8 @@ def terrain_mesh(terrain: Terrain, center=(0.0, 0.0, 0.0), extent: float = 4.0, 
         return _u_channel(terrain, c, extent, cell)
     if isinstance(terrain, Moulin):
         return _moulin(terrain, c, extent, cell, cut)
+    if isinstance(terrain, SlotMoulin):
+        return _slot_moulin(terrain, c, extent, cell, cut)
     if isinstance(terrain, FourierCylinder):
         return _cylinder(terrain, c, extent, cell, cut, s_range=None)
     if isinstance(terrain, ObstacleField):
@@ -232,6 +235,27 @@ def _moulin(t: Moulin, c, extent, cell, cut) -> TerrainMesh:
         horiz = np.array([cut[0], cut[1], 0.0])
         keep &= mid @ horiz <= 0.0
     return _join(wall, _quads(P, keep))
+
+
+def _slot_moulin(t: SlotMoulin, c, extent, cell, cut) -> TerrainMesh:
+    """The slot's wall (SlotMoulin.wall_points) from the surface down 2·extent along the shaft, below the
+    surface, cut away towards the viewer; the surface square with the mouth left open."""
+    P = t.wall_points((-2 * extent, 0.0), cell)
+    mid = 0.25 * (P[:-1, :-1] + P[1:, :-1] + P[1:, 1:] + P[:-1, 1:])
+    keep = mid[..., 2] < t.top
+    if cut is not None:
+        ax = t.R[:, 2]
+        radial = mid - t.origin - ((mid - t.origin) @ ax)[..., None] * ax
+        keep &= radial @ cut <= 1e-9
+    wall = _quads(P, keep, flip=True)       # d(loop) x ds points into the ice
+    if not t.surface:
+        return wall
+    S = _rect(np.array([c[0], c[1], t.top]), np.array([1.0, 0, 0]), np.array([0, 1.0, 0]), extent, extent, cell)
+    smid = 0.25 * (S[:-1, :-1] + S[1:, :-1] + S[1:, 1:] + S[:-1, 1:])
+    skeep = t.shaft_distance(smid.reshape(-1, 3)).reshape(smid.shape[:2]) < 0.0
+    if cut is not None:
+        skeep &= (smid - t.origin) @ np.array([cut[0], cut[1], 0.0]) <= 0.0
+    return _join(wall, _quads(S, skeep))
 
 
 def _obstacles(t: ObstacleField, c, extent, cell) -> TerrainMesh:

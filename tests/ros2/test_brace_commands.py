@@ -24,7 +24,7 @@ DURATION = 6.0
 MALFORMED = [
     ({"changed_parameters": [{"name": "speed", "value": {"type": 3, "double_value": 1.0}}]},
      "/brace/parameters: changed_parameters[0].name = 'speed' is not a parameter here "
-     "(valid: target_force, climb_speed)"),
+     "(valid: target_force, climb_speed, descent_speed)"),
     ({"changed_parameters": [{"name": "target_force", "value": {"type": 3, "double_value": 0.0}}]},
      "/brace/parameters: changed_parameters[0].value (target_force) = 0 N is out of range (> 0)"),
     ({"changed_parameters": [{"name": "climb_speed", "value": {"type": 4, "string_value": "fast"}}]},
@@ -39,6 +39,8 @@ def test_validate_names_the_field():
     assert ok == {"climb_speed": -3.0, "target_force": 80.0}
     with pytest.raises(Rejected, match=r"value \(target_force\) = -5 N is out of range \(> 0\)"):
         Ros2BraceCommands.validate(E(changed_parameters=[parameter("target_force", -5.0)]))
+    with pytest.raises(Rejected, match=r"value \(descent_speed\) = -0.01 m/s is out of range \(>= 0\)"):
+        Ros2BraceCommands.validate(E(changed_parameters=[parameter("descent_speed", -0.01)]))
     with pytest.raises(Rejected, match=r"value \(climb_speed\) = inf is not finite"):
         Ros2BraceCommands.validate(E(changed_parameters=[parameter("climb_speed", math.inf)]))
     with pytest.raises(Rejected, match=r"deleted_parameters\[0\].name = 'climb_speed' is also set"):
@@ -88,7 +90,7 @@ def test_attach_wires_the_brace_inputs_the_scene_leaves_free():
     spec = r.components["ros2_brace_commands"]
     assert spec.params == {"domain_id": 7} and spec.rate == pytest.approx(100.0)
     wired = sorted(d for s, d, _ in r.connections if s.startswith("ros2_brace_commands."))
-    assert wired == ["brace.climb_speed", "brace.target_force"]
+    assert wired == ["brace.climb_speed", "brace.descent_speed", "brace.target_force"]
     # a scene without a brace controller gets no source
     r = resolve("tube-dangling", search_path=reg.assembly_paths(), overrides=["robot.modules=2"])
     attach_ros2(r, reg)
