@@ -188,6 +188,21 @@ def prepare_from(order, p, has_a, atw, apo, Iin_src, sig_src, Iin, AtwO, ApO, si
 
 
 @njit(cache=True)
+def _factor_root(Rr, A, root_lu, root_piv):
+    """LU of the free-flyer's block Sbᵀ A Sb, Sb = blockdiag(Rr, Rr) (A: the root's articulated 6×6)."""
+    for bi in range(2):
+        for bj in range(2):
+            for i in range(3):
+                for j in range(3):
+                    s = 0.0
+                    for a in range(3):
+                        for b in range(3):
+                            s += Rr[a, i] * A[3 * bi + a, 3 * bj + b] * Rr[b, j]
+                    root_lu[3 * bi + i, 3 * bj + j] = s
+    return lu_factor(root_lu, root_piv)
+
+
+@njit(cache=True)
 def factor(order, parent, jtype, vidx, anc_ptr, anc_dof, R, Iin, AtwO, ApO, has_a, sig, c, d, Ia, Ucol, Urow, D,
            root_lu, root_piv):
     """Eliminate every DOF of W = Σ J_lᵀ (Iin − c AtwO − c² ApO)_l J_l + diag(d) from the leaves
@@ -236,19 +251,7 @@ def factor(order, parent, jtype, vidx, anc_ptr, anc_dof, R, Iin, AtwO, ApO, has_
                 for j in range(6):
                     P[i, j] += A[i, j]
     # the free-flyer: Sbᵀ Ia_root Sb, Sb = blockdiag(R_root, R_root)
-    root = order[0]
-    Rr = R[root]
-    A = Ia[root]
-    for bi in range(2):
-        for bj in range(2):
-            for i in range(3):
-                for j in range(3):
-                    s = 0.0
-                    for a in range(3):
-                        for b in range(3):
-                            s += Rr[a, i] * A[3 * bi + a, 3 * bj + b] * Rr[b, j]
-                    root_lu[3 * bi + i, 3 * bj + j] = s
-    return lu_factor(root_lu, root_piv)
+    return _factor_root(R[order[0]], Ia[order[0]], root_lu, root_piv)
 
 
 @njit(cache=True)
@@ -302,17 +305,7 @@ def factor_symmetric(order, parent, jtype, vidx, anc_ptr, anc_dof, R, Iin, sig, 
     for i in range(6):
         for j in range(i):
             A[i, j] = A[j, i]
-    Rr = R[root]
-    for bi in range(2):
-        for bj in range(2):
-            for i in range(3):
-                for j in range(3):
-                    s = 0.0
-                    for a in range(3):
-                        for b in range(3):
-                            s += Rr[a, i] * A[3 * bi + a, 3 * bj + b] * Rr[b, j]
-                    root_lu[3 * bi + i, 3 * bj + j] = s
-    return lu_factor(root_lu, root_piv)
+    return _factor_root(R[root], A, root_lu, root_piv)
 
 
 @njit(cache=True)

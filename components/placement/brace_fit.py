@@ -51,6 +51,19 @@ class BraceFit:
     feasible: bool
 
 
+def sampled_robot(robot: RobotModel, spacing: float):
+    """The robot's Pinocchio model (free-flyer root) and data, the body contact's samples on every link's
+    collision shapes (screws included) at ``spacing`` m, each sample's link row, the links' frame ids and
+    the rows that carry samples: what a brace fit poses and checks against the terrain."""
+    import pinocchio as pin
+
+    model = pin.buildModelFromXML(robot.urdf, pin.JointModelFreeFlyer())
+    S = body_samples(robot, BodySampleOptions(spacing=spacing, exclude_screws=False))
+    link_of = np.repeat(S.piece_link, np.diff(S.start))
+    frames = [model.getFrameId(n) for n in robot.links]
+    return model, model.createData(), S, link_of, frames, np.unique(link_of)
+
+
 def fit_planar_brace(robot: RobotModel, gap: float, walls: dict[int, int], bend_limit: float,
                      clearance: float = 0.005, starts: int = 25, seed: int = 0, spacing: float = 0.02) -> BraceFit:
     """The best planar C of ``robot`` in a gap ``gap`` m wide with screw k (index in the design's screw list)
@@ -64,12 +77,7 @@ def fit_planar_brace(robot: RobotModel, gap: float, walls: dict[int, int], bend_
     screws = robot.metadata.get("screws") or []
     if any(not 0 <= k < len(screws) for k in walls):
         raise ValueError(f"fit_planar_brace: screw indices must be in 0..{len(screws) - 1}, got {sorted(walls)}")
-    model = pin.buildModelFromXML(robot.urdf, pin.JointModelFreeFlyer())
-    data = model.createData()
-    S = body_samples(robot, BodySampleOptions(spacing=spacing, exclude_screws=False))
-    link_of = np.repeat(S.piece_link, np.diff(S.start))
-    frames = [model.getFrameId(n) for n in robot.links]
-    rows = np.unique(link_of)
+    model, data, S, link_of, frames, rows = sampled_robot(robot, spacing)
     touching = {robot.links.index(screws[k]["link"]): (k, s) for k, s in walls.items()}
     free = ~np.isin(link_of, list(touching))
     bends = [j for j, kind in zip(robot.joints, robot.joint_kinds) if kind == "bend"]

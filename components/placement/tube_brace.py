@@ -34,8 +34,9 @@ import dataclasses
 
 import numpy as np
 
-from snakesim.components.contact.body_samples import BodySampleOptions, body_samples
 from snakesim.components.multibody.robot_model import RobotModel
+
+from .brace_fit import sampled_robot
 
 
 @dataclasses.dataclass(frozen=True)
@@ -77,12 +78,7 @@ def fit_leaning_tube_brace(robot: RobotModel, terrain, q: list[float], pose: dic
         raise ValueError(f"fit_leaning_tube_brace: screws must be indices in 0..{len(meta) - 1}, got {screws}")
     if len(q) != len(robot.joints):
         raise ValueError(f"fit_leaning_tube_brace: q has {len(q)} angles, the robot {len(robot.joints)} joints")
-    model = pin.buildModelFromXML(robot.urdf, pin.JointModelFreeFlyer())
-    data = model.createData()
-    S = body_samples(robot, BodySampleOptions(spacing=spacing, exclude_screws=False))
-    link_of = np.repeat(S.piece_link, np.diff(S.start))
-    frames = [model.getFrameId(n) for n in robot.links]
-    rows = np.unique(link_of)
+    model, data, S, link_of, frames, rows = sampled_robot(robot, spacing)
     touching = {robot.links.index(meta[k]["link"]): k for k in screws}
     radius = {k: float(meta[k]["radius"]) for k in screws}
     ring_x = {k: 0.5 * float(meta[k]["length"]) * np.array([-1.0, 0.0, 1.0]) for k in screws}
@@ -176,11 +172,8 @@ def narrowest_vertical_tube(robot: RobotModel, links: list[str], orientations: i
     from scipy.optimize import minimize
     from scipy.spatial.transform import Rotation
 
-    model = pin.buildModelFromXML(robot.urdf, pin.JointModelFreeFlyer())
-    data = model.createData()
+    model, data, S, link_of, _, _ = sampled_robot(robot, spacing)
     pin.framesForwardKinematics(model, data, pin.neutral(model))
-    S = body_samples(robot, BodySampleOptions(spacing=spacing, exclude_screws=False))
-    link_of = np.repeat(S.piece_link, np.diff(S.start))
     base = data.oMf[model.getFrameId(links[0])]
     pts = []
     for name in links:
