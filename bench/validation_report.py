@@ -51,6 +51,11 @@ CHECKS = {  # test module -> what it checks against
     "tests/contact/test_body_contact.py": "body contact: F/k sink, slope slide/creep, anisotropy, vs hull back end",
     "tests/contact/test_screw_sdf_curved.py": "curved terrain: sink F/k at every roll and spin angle",
     "tests/multibody/test_articulated_solve.py": "O(N) implicit solve = dense solve; tree dynamics = Pinocchio ABA",
+    "tests/multibody/test_joint_stops.py": "joint stops: static deflection τ/k, energy through an impact, implicit J",
+    "tests/validation/test_moulin_brace_down.py": "moulin down-climb: hold, descent at ω r sin β, tether slack",
+    "tests/validation/test_tube_body_brace.py": "tube body brace: Σ F_z = m g, hold, clearance and limits",
+    "tests/validation/test_tube_body_brace_descend.py": "tube friction descent: speed = command, μ ΣF_n = m g, re-grip",
+    "tests/validation/test_u_channel_body_brace.py": "U-channel body brace: rolls at ω r, Σ F_z = m g, bodies clear",
 }
 
 
