@@ -63,8 +63,13 @@ class FixedStep(Integrator):
 
     Params = FixedStepParams
 
+    def substeps_now(self, t0: float) -> int:
+        """How many equal steps the base step from ``t0`` is taken in (``substeps``; a method may take more
+        where it knows the dynamics are fast: rosenbrock_w's refresh window)."""
+        return self.p.substeps
+
     def advance(self, t0, t1, k1):
-        n = self.p.substeps
+        n = self.substeps_now(t0)
         if n == 1:
             self.step(t0, t1 - t0, k1)
             self.stats["steps"] += 1

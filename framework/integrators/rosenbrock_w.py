@@ -208,18 +208,9 @@ class RosenbrockW(FixedStep):
             return True
         return t < self._burst_until
 
-    def advance(self, t0, t1, k1):
+    def substeps_now(self, t0):
         self._event = bool(self._watched) and self._source_event(t0, self.h_lu is None)
-        if not self._event or self.p.refresh_substeps == 1:
-            return super().advance(t0, t1, k1)
-        n = self.p.substeps * self.p.refresh_substeps
-        h = (t1 - t0) / n
-        for s in range(n):
-            if s:
-                k1 = self.sys.f(t0 + s * h, self.sys.X)
-                self.stats["f_evals"] += 1
-            self.step(t0 + s * h, h, k1)
-            self.stats["steps"] += 1
+        return self.p.substeps * (self.p.refresh_substeps if self._event else 1)
 
     def step(self, t, h, k1):
         sys, lin = self.sys, self.lin
