@@ -88,23 +88,13 @@ def reduced_matrix(W, M, Gq, Gv, c, q0, nv, Dinv, gf_r, gf_c, gf_v, p_ptr, p_c, 
 def owner_solve(r, out, owned, Dinv, c, q0, nv, M, Gq, gf_r, gf_c, gf_v, p_r, p_c, p_v, lu, piv, z, rhs):
     """The owner's k_q, k_v into out:  [reduced W] k_v = M r_v + c G_q r_q + c G_F D (r_F + c P_q r_q),
     k_q = r_q + c k_v. z (ndx) and rhs (nv) are scratch."""
-    if gf_r.size:
-        for i in range(r.size):
-            z[i] = 0.0 if owned[i] else r[i]
-        for k in range(p_r.size):
-            col = p_c[k]
-            if q0 <= col < q0 + nv:
-                z[p_r[k]] += c * p_v[k] * r[col]
-        for i in range(r.size):
-            z[i] *= Dinv[i]
     v0 = q0 + nv
     for i in range(nv):
         s = 0.0
         for j in range(nv):
             s += M[i, j] * r[v0 + j] + c * Gq[i, j] * r[q0 + j]
         rhs[i] = s
-    for k in range(gf_r.size):
-        rhs[gf_r[k]] += c * gf_v[k] * z[gf_c[k]]
+    first_order_share(r, owned, Dinv, c, q0, nv, gf_r, gf_c, gf_v, p_r, p_c, p_v, z, rhs)
     lu_solve(lu, piv, rhs)
     for i in range(nv):
         out[v0 + i] = rhs[i]

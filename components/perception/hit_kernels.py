@@ -267,17 +267,7 @@ def link_rays(rays, o, d, min_range, best, R, p, box_lo, box_hi):
         for a in range(3):           # Rᵀ·(s − p), Rᵀ·d
             s[a] = R[0, a] * x + R[1, a] * y + R[2, a] * z
             v[a] = R[0, a] * d[i, 0] + R[1, a] * d[i, 1] + R[2, a] * d[i, 2]
-        # slab test: the segment 0 <= t <= best meets the box
-        t0, t1 = 0.0, float(best[i])
-        for a in range(3):
-            if v[a] != 0.0:
-                ta, tb = (box_lo[a] - s[a]) / v[a], (box_hi[a] - s[a]) / v[a]
-                if ta > tb:
-                    ta, tb = tb, ta
-                t0, t1 = max(t0, ta), min(t1, tb)
-            elif s[a] < box_lo[a] or s[a] > box_hi[a]:
-                t1 = -1.0
-        if t0 > t1:
+        if _box_entry(s, v, float(best[i]), box_lo, box_hi) < 0.0:    # the segment 0 <= t <= best misses
             continue
         kept[n] = i
         for a in range(3):

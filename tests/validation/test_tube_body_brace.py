@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from validation_scenes import run
+from validation_scenes import assert_bodies_clear_and_within_limits, run
 
 SCENE = "tube-body-brace"
 BRACE, FREE = [0, 2, 4], [1, 3]
@@ -46,14 +46,7 @@ def test_holds_ten_seconds_in_static_balance(hold):
 
 def test_no_body_in_the_wall_and_joints_within_limits(hold):
     s, r, robot = hold
-    assert s.plan.components["robot"]._stops is not None
-    cl = r.summary["reports"]["clearance"]
-    assert cl["inside"] == {} and cl["max_depth_m"] <= 0.005
-    lo, hi = robot.position_limits()
-    q = r["robot.joint_q"]
-    for k, kind in enumerate(robot.joint_kinds):
-        if kind in ("bend", "twist"):
-            assert lo[k] <= q[:, k].min() and q[:, k].max() <= hi[k], robot.joints[k]
+    assert_bodies_clear_and_within_limits(s, r, robot)
 
 
 def test_the_bracing_screws_lie_in_one_plane_through_the_axis(hold):

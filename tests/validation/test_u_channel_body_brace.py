@@ -25,7 +25,7 @@ import yaml
 
 from snakesim import assemblies
 
-from validation_scenes import run
+from validation_scenes import assert_bodies_clear_and_within_limits, run
 
 SCENE = "u-channel-body-brace-traverse"
 LIFT = 0.3          # m, the scene's pose above walls-body-brace's
@@ -72,14 +72,7 @@ def test_drives_along_the_channel_at_omega_r(traverse):
 
 def test_no_body_in_the_terrain_and_joints_within_limits(traverse):
     s, r, robot, p = traverse
-    assert s.plan.components["robot"]._stops is not None               # joint stops on
-    cl = r.summary["reports"]["clearance"]
-    assert cl["inside"] == {} and cl["max_depth_m"] <= 0.005
-    lo, hi = robot.position_limits()
-    q = r["robot.joint_q"]
-    for k, kind in enumerate(robot.joint_kinds):
-        if kind in ("bend", "twist"):
-            assert lo[k] <= q[:, k].min() and q[:, k].max() <= hi[k], robot.joints[k]
+    assert_bodies_clear_and_within_limits(s, r, robot)
     assert r.summary["reports"]["limits"]["past_limits"] == {}
 
 

@@ -67,3 +67,16 @@ def reference_track(duration: float, sets=(), scene: str = TRAVERSE, refresh: bo
     CACHE.mkdir(parents=True, exist_ok=True)
     np.savez(path, t=t, pose=pose, meta=json.dumps(meta))
     return t, pose
+
+
+def assert_bodies_clear_and_within_limits(s, r, robot, depth: float = 0.005) -> None:
+    """A body-respecting scene's run: joint stops on, no link deeper than ``depth`` m in the terrain (its
+    terrain_clearance report), every bend and twist inside its URDF limits throughout."""
+    assert s.plan.components["robot"]._stops is not None                 # joint stops on
+    cl = r.summary["reports"]["clearance"]
+    assert cl["inside"] == {} and cl["max_depth_m"] <= depth
+    lo, hi = robot.position_limits()
+    q = r["robot.joint_q"]
+    for k, kind in enumerate(robot.joint_kinds):
+        if kind in ("bend", "twist"):
+            assert lo[k] <= q[:, k].min() and q[:, k].max() <= hi[k], robot.joints[k]
