@@ -116,7 +116,12 @@ def settings(quick: bool, case: str):
            # of the step with refresh_substeps 4), else every 8 steps
            W("ros2", 5e-3, jacobian_every=8, jacobian_refresh="on_sources", refresh_window=0.05),
            W("ros2", 1 / 150, jacobian_every=8, jacobian_refresh="on_sources", refresh_window=0.1, refresh_substeps=4),
-           W("ros2", 1e-2, jacobian_every=8, jacobian_refresh="on_sources", refresh_window=0.1, refresh_substeps=4)]
+           W("ros2", 1e-2, jacobian_every=8, jacobian_refresh="on_sources", refresh_window=0.1, refresh_substeps=4),
+           # error control (issue 24): steps of the base step / 2^k chosen by ros2's embedded estimate
+           W("ros2", 1e-2, jacobian_every=8, step_control="error", atol_q=3e-3, atol_v=3e-2, rtol=3e-2),
+           W("ros2", 1e-2, jacobian_every=8, step_control="error", atol_q=1e-2, atol_v=1e-1, rtol=1e-1),
+           W("ros2", 2e-2, jacobian_every=8, jacobian_refresh="on_sources", refresh_window=0.1),
+           W("ros2", 2e-2, jacobian_every=8, jacobian_refresh="on_sources", refresh_window=0.1, error_filter=False)]
     if case != "walls":               # explicit methods need ~10 µs steps on the walls (λ ~ −3e5 /s)
         out = [({"name": "rk4"}, 1e-3), ({"name": "semi_implicit_euler"}, 1e-3)] + out
     else:

@@ -166,9 +166,10 @@ class Linearization:
         self.stats = {"assemblies": 0}
         self.gamma_hint = None         # the integrator's γ, for messages (c = γh)
         self._dinv_at = (None, None)   # (c, d) of the last Dinv
+        self._dinvs: dict = {}         # c -> Dinv for the current d: a step-size ladder revisits a few c
         self._rhs: dict = {}           # q0 -> an owner's right-hand-side scratch (kept: bound solves read it)
         self._extra: dict = {}         # q0 -> an owner's first-order diagonal share (kept: operators bind to it)
-        self._solve_key = object()     # replaced when a factorisation changes what a bound solve holds
+        self._solve_key = None         # replaced when a factorisation changes what a bound solve holds
         self._solve_parts = None
 
     # -- what components ask ---------------------------------------------------------------------
@@ -300,7 +301,12 @@ class Linearization:
         """Factorise the reduced systems of I − c·J (c = γh)."""
         self.c = c
         if c != self._dinv_at[0] or self.d is not self._dinv_at[1]:    # d is replaced whenever it changes
-            self.Dinv = 1.0 / (1.0 - c * self.d)
+            if self.d is not self._dinv_at[1]:
+                self._dinvs.clear()
+            Dinv = self._dinvs.get(c)
+            if Dinv is None:
+                Dinv = self._dinvs[c] = 1.0 / (1.0 - c * self.d)
+            self.Dinv = Dinv
             self._dinv_at = (c, self.d)
         self.blocks = []
         P = self.P
@@ -337,7 +343,11 @@ class Linearization:
         if last is None or last[0] != c or any(a is not b for a, b in zip(last[1:3], parts[1:3])) or \
                 len(last[3]) != len(parts[3]) or \
                 any(a is not b for x, y in zip(last[3], parts[3]) for a, b in zip(x, y)):
-            self._solve_key, self._solve_parts = object(), parts
+            # the key names what a bound solve holds: c and the objects it reads (their ids, kept alive by
+            # parts in the bound solves' caches, so an id is never reused while a cache holds it)
+            self._solve_key = (c, id(self.Dinv), id(P),
+                               tuple(id(a) for x in parts[3] for a in x if a is not None and not isinstance(a, bool)))
+            self._solve_parts = parts
 
     def bind_solve(self, r: np.ndarray, out: np.ndarray):
         """:meth:`solve` (r, out) for arrays fixed for a run (an integrator's work arrays): a call without
@@ -346,10 +356,17 @@ class Linearization:
         them (a new c, new declarations), so a call costs a few bound kernel calls; otherwise it is
         ``solve(r, out)``. The same arithmetic either way."""
         held = [None, ()]
+        bound: dict = {}        # key -> (calls, parts): a step-size ladder switches between a few factorisations
 
         def solve():
-            if held[0] is not self._solve_key:
-                held[0], held[1] = self._solve_key, self._bound_solve(r, out)
+            key = self._solve_key
+            if held[0] != key:
+                got = bound.get(key)
+                if got is None:
+                    if len(bound) >= 64:
+                        bound.clear()
+                    got = bound[key] = (self._bound_solve(r, out), self._solve_parts)
+                held[0], held[1] = key, got[0]
             for call in held[1]:
                 call()
         return solve

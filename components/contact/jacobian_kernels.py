@@ -31,14 +31,15 @@ K, C, MU, EV_A, EV_B = range(5)
 
 
 @njit(cache=True)
-def point_jacobian(depth, n, v, e, stiffness, damping, mu, ev_a, ev_b, v_eps, mode, ev_floor, Dv, Dp, W, gk):
+def point_jacobian(depth, n, v, e, stiffness, damping, mu, ev_a, ev_b, v_eps, mode, ev_floor, ahead, Dv, Dp, W, gk):
     """∂F/∂v (3×3) into Dv and ∂F/∂p_s into Dp at one point (see the module docstring); W is (3, 3, 3)
     scratch. Dp = g ⊗ (−k n̂) is rank one: g·(−k) goes into gk (3) for :func:`add_lever_rank1`. Returns
-    False when the point pushes no force (F_n = 0: Dv and Dp are zero). No allocation."""
+    False when the point pushes no force (F_n = 0: Dv and Dp are zero) and is not ``ahead`` (about to touch:
+    then the normal spring-damper's slopes are given as if it pushed, with F_n = 0). No allocation."""
     vn = v[0] * n[0] + v[1] * n[1] + v[2] * n[2]
     raw = stiffness * depth - damping * vn
     fn = raw if (depth > 0.0 and raw > 0.0) else 0.0
-    on = 1.0 if fn > 0.0 else 0.0
+    on = 1.0 if (fn > 0.0 or ahead) else 0.0
     t0, t1, t2 = v[0] - vn * n[0], v[1] - vn * n[1], v[2] - vn * n[2]
     speed = math.sqrt(t0 * t0 + t1 * t1 + t2 * t2)
     # s = a t, ∂s/∂t = a I − b t tᵀ
@@ -87,7 +88,7 @@ def point_jacobian(depth, n, v, e, stiffness, damping, mu, ev_a, ev_b, v_eps, mo
             Dv[i, j] = gi * cd * n[j] - mf * (B[i, j] - bn * n[j])       # A ∂s/∂t (I − n nᵀ)
             Dp[i, j] = gi * ck * n[j]
     gk[0], gk[1], gk[2] = g0 * ck, g1 * ck, g2 * ck
-    return fn > 0.0
+    return on > 0.0
 
 
 @njit(cache=True)
@@ -164,11 +165,16 @@ def _clear_marked(d_twist, d_pose, on_link):
 
 @njit(cache=True)
 def contact_jacobian_blocks(m, distance, normal, material, owner, point, vel, poses, axis_B, screw_row,
-                            parent_row, lead_angle, hand, mats, v_eps, mode, ev_floor, d_twist, d_pose, on_link):
+                            parent_row, lead_angle, hand, mats, v_eps, mode, ev_floor, near, lookahead_time, d_twist,
+                            d_pose, on_link):
     """Per screw link, Σ over its samples in contact of X_cᵀ ∂F/∂v X_c and X_cᵀ ∂F/∂p_s X_c (about the
     screw link's origin, world axes), from the last evaluation's per-sample results (point = p_c,
-    vel = v). Blocks of links marked in on_link are overwritten, others untouched;
-    returns the number of links marked."""
+    vel = v). A sample not yet touching (gap under ``near``) whose gap closes within ``lookahead_time`` at its approach speed
+    (its p_c and v are there: contact_wrenches' ``near`` rows) adds its normal spring-damper slopes too:
+    a step that starts with the contact open then meets it implicitly, as a joint stop's look-ahead
+    does (joint_stops.py), instead of integrating k and c explicitly over the step that makes contact.
+    Blocks of links marked in on_link are overwritten, others untouched; returns the number of links
+    marked."""
     _clear_marked(d_twist, d_pose, on_link)
     Dv = np.empty((3, 3))
     Dp = np.empty((3, 3))
@@ -185,8 +191,14 @@ def contact_jacobian_blocks(m, distance, normal, material, owner, point, vel, po
     a0 = a1 = a2 = cl = sl = 0.0
     for i in range(m):
         d = -distance[i]
+        ahead = False
         if not d > 0.0:
-            continue
+            if not -d < near:
+                continue                    # beyond the near rows contact_wrenches gave p_c and v
+            vn = vel[i, 0] * normal[i, 0] + vel[i, 1] * normal[i, 1] + vel[i, 2] * normal[i, 2]
+            if not -d < -vn * lookahead_time:
+                continue
+            ahead = True
         s = owner[i]
         if s != last:
             last = s
@@ -215,7 +227,7 @@ def contact_jacobian_blocks(m, distance, normal, material, owner, point, vel, po
         e[0], e[1], e[2] = cl * a0 - sl * cx, cl * a1 - sl * cy, cl * a2 - sl * cz
         mat = material[i]
         if point_jacobian(d, nrm, vv, e, mats[mat, K], mats[mat, C], mats[mat, MU], mats[mat, EV_A],
-                          mats[mat, EV_B], v_eps, mode, ev_floor, Dv, Dp, W, gk):
+                          mats[mat, EV_B], v_eps, mode, ev_floor, ahead, Dv, Dp, W, gk):
             add_lever_quadratic(rc, Dv, d_twist[o])
             add_lever_rank1(rc, gk, nrm, d_pose[o])           # X_cᵀ (gk ⊗ n̂) X_c
         if not on_link[o]:
@@ -263,7 +275,7 @@ def body_jacobian_blocks(m, distance, normal, material, sample, owner, point, ve
             rc[j] = point[i, j] - poses[b, j]
         mat = material[i]
         if point_jacobian(d, nrm, vv, e, mats[mat, K], mats[mat, C], mats[mat, MU] * mu_scale[k], skin_ratio[k],
-                          0.0, v_eps, mode, ev_floor, Dv, Dp, W, gk):
+                          0.0, v_eps, mode, ev_floor, False, Dv, Dp, W, gk):
             add_lever_quadratic(rc, Dv, d_twist[b])
             add_lever_rank1(rc, gk, nrm, d_pose[b])
         if not on_link[b]:

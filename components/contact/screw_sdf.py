@@ -39,6 +39,12 @@ Jacobians (jacobian_kernels.py) are unchanged. On a plane (numba) the samples ar
 Cost: one more Terrain.query call (the extremal points) for terrains other than a plane.
 ``ring_contact="samples"`` is the former model, bit for bit.
 
+Look-ahead (``lookahead_gap``, ``lookahead_time``): a ring within lookahead_gap of the terrain whose gap
+closes within lookahead_time at its approach speed declares its normal spring-damper's slopes in the
+implicit step's Jacobian before it touches (jacobian_kernels.contact_jacobian_blocks). A step that starts
+with a contact open and meets it then takes k and c implicitly instead of throwing the robot (the same
+remedy as a joint stop's look-ahead; MuJoCo's contact ``margin``). Forces are unchanged.
+
 Watch (``max_depth``): a contact deeper than max_depth ends the run naming the screw link
 and the depth (a bounce from a step too large for k, or a material too soft), never
 believable garbage.
@@ -113,6 +119,11 @@ class ScrewSdfContactParams(Params):
         "normal (exact on curved terrain); 'samples': only where its samples do (sinks up to r(1 − cos(π/per_ring)))")
     broad_phase: bool = True
     margin: float = Field(0.0, ge=0, description="m added to each screw's bounding sphere")
+    lookahead_gap: float = Field(0.01, ge=0, description="m: rings this close to the terrain, not yet touching, "
+                                                         "are looked at for the implicit step's look-ahead")
+    lookahead_time: float = Field(0.02, ge=0, description="s: a ring whose gap closes within this time at its "
+                                                          "approach speed puts its spring-damper in the implicit "
+                                                          "step's Jacobian before it touches (0: only contacts)")
 
 
 class ScrewSdfContact(Component[ScrewSdfContactParams]):
@@ -159,7 +170,7 @@ class ScrewSdfContact(Component[ScrewSdfContactParams]):
         self.n_rings = int(n_rings.sum())
         #: rows of the per-contact arrays: the samples, then (exact rings) one per ring
         self.n_rows = self.n_samples + (self.n_rings if self.exact else 0)
-        self._sphere_r = np.sqrt(lay.radius ** 2 + (0.5 * lay.length) ** 2) + p.margin
+        self._sphere_r = np.sqrt(lay.radius ** 2 + (0.5 * lay.length) ** 2) + p.margin + p.lookahead_gap
         self._samples = Samples(
             broad_phase=p.broad_phase, sphere_r=self._sphere_r,
             start=start, points_B=points_B,
@@ -169,7 +180,8 @@ class ScrewSdfContact(Component[ScrewSdfContactParams]):
             screw_row=lay.screw_row, radius=lay.radius, lead_angle=lay.lead_angle, hand=lay.hand,
             spin_dof=lay.spin_dof, spin_mult=lay.spin_mult, v_eps=p.v_eps, mode=MODES[p.regularisation],
             ev_floor=p.ev_floor, ring_start=ring_start, ring_first=ring_first.astype(np.int64),
-            cos_sep=float(np.cos(min(2.0 * np.pi / p.per_ring, 0.5 * np.pi))))
+            cos_sep=float(np.cos(min(2.0 * np.pi / p.per_ring, 0.5 * np.pi))), near=p.lookahead_gap,
+            lookahead_time=p.lookahead_time)
 
     def stiffness_hint(self, u, readers):
         """Penalty contact on the lightest screw, one point per ring at once (:mod:`.stiffness_hint`)."""

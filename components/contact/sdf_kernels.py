@@ -71,7 +71,7 @@ def sample_points(poses, active, n_active, start, points_B, parent_row, R, out_p
 @njit(cache=True)
 def contact_wrenches(m, distance, normal, material, sample, owner, poses, vels, joint_v, ringc_B, radial_B, axis_B,
                      parent_row, screw_row, radius, lead_angle, hand, spin_dof, spin_mult, mats, v_eps, mode,
-                     ev_floor, R, out_point, out_vel, out_force, out_fn, out_wrench, out_screw_fn):
+                     ev_floor, near, R, out_point, out_vel, out_force, out_fn, out_wrench, out_screw_fn):
     """Forces on the first m samples and their wrenches about each screw link's origin o_S.
 
     A sample in contact (φ < 0) gives the depth d = −φ and the terrain normal n̂. The
@@ -87,8 +87,9 @@ def contact_wrenches(m, distance, normal, material, sample, owner, poses, vels, 
     so the sampling sets only where and how deep the contact is, never a spurious
     normal velocity or spin torque from a sample that lies off the envelope's lowest line.
     Wrench [f, (p_c − o_S) × f] into out_wrench[screw_row[s]] (zeroed first). Writes
-    out_point (p_c), out_vel, out_force, out_fn for samples in contact (zeros elsewhere).
-    Returns the number of samples in contact.
+    out_point (p_c), out_vel, out_force, out_fn for samples in contact, and p_c and v (no force) for samples
+    within ``near`` of the surface (the implicit step's look-ahead: jacobian_kernels.contact_jacobian_blocks);
+    zeros elsewhere. Returns the number of samples in contact.
     """
     out_wrench[:, :] = 0.0
     out_screw_fn[:] = 0.0
@@ -98,14 +99,13 @@ def contact_wrenches(m, distance, normal, material, sample, owner, poses, vels, 
     ax = ay = az = cl = sl = 0.0
     for i in range(m):
         d = -distance[i]
-        if not d > 0.0:
+        if not d > -near:
             out_fn[i] = 0.0
             for j in range(3):
                 out_force[i, j] = 0.0
                 out_vel[i, j] = 0.0
                 out_point[i, j] = 0.0
             continue
-        n_contact += 1
         s = owner[i]
         q = sample[i]
         if s != last:
@@ -141,6 +141,11 @@ def contact_wrenches(m, distance, normal, material, sample, owner, poses, vels, 
         vz = vels[b, 2] + (wx * ry - wy * rx) + wr * cz
         out_point[i, 0], out_point[i, 1], out_point[i, 2] = px, py, pz
         out_vel[i, 0], out_vel[i, 1], out_vel[i, 2] = vx, vy, vz
+        if not d > 0.0:                                 # near, not touching: no force
+            out_fn[i] = 0.0
+            out_force[i, 0], out_force[i, 1], out_force[i, 2] = 0.0, 0.0, 0.0
+            continue
+        n_contact += 1
         mat = material[i]
         # ê_v: normal to the thread line at p_c (lead angle, hand; cl, sl above), projected in the kernel
         fn, fx, fy, fz = point_contact_force(
@@ -313,19 +318,20 @@ def plane_contact_step(broad_phase, origin, n, region_material, sphere_r, start,
             material[i] = region_material
     n_contact = contact_wrenches(m, distance, normal, material, sample, owner, poses, vels, joint_v, ringc_B,
                                  radial_B, axis_B, parent_row, screw_row, radius, lead_angle, hand, spin_dof,
-                                 spin_mult, mats, v_eps, mode, ev_floor, R, out_point, out_vel, out_force, out_fn,
-                                 out_wrench, out_screw_fn)
+                                 spin_mult, mats, v_eps, mode, ev_floor, 0.0, R, out_point, out_vel, out_force,
+                                 out_fn, out_wrench, out_screw_fn)
     return n_active, m, n_contact
 
 
 @njit(cache=True)
 def plane_rings(poses, active, n_active, start, points_B, ring_start, ring_first, ringc_B, axis_B, parent_row, radius,
-                origin, n, R, out_points, out_distance, out_normal, out_sample, out_owner):
+                origin, n, near, R, out_points, out_distance, out_normal, out_sample, out_owner):
     """Exact rings against a plane, without querying the samples: a plane's normal is the same
     everywhere, so every sample of a ring meets the surface its extremal point does (finish_extremal
     would drop them all) unless n̂ ∥ â, where the ring's samples act. Rows: the extremal point of each
     ring that reaches the plane (φ(c) < r: depth r |n̂ − (n̂·â)â| − φ(c)), or the samples of a ring
-    whose axis is along n̂. Returns the number of rows."""
+    whose axis is along n̂; a ring whose extremal point is within ``near`` above the plane is a row too
+    (not touching: the Jacobian's look-ahead). Returns the number of rows."""
     k = 0
     for a in range(n_active):
         s = active[a]
@@ -345,7 +351,7 @@ def plane_rings(poses, active, n_active, start, points_B, ring_start, ring_first
             cz = poses[b, 2] + R[2, 0] * ringc_B[q, 0] + R[2, 1] * ringc_B[q, 1] + R[2, 2] * ringc_B[q, 2]
             if un > 1e-9:
                 phi = (cx - origin[0]) * n[0] + (cy - origin[1]) * n[1] + (cz - origin[2]) * n[2]
-                if phi < r:
+                if phi < r + near:
                     px, py, pz = cx + r * ux / un, cy + r * uy / un, cz + r * uz / un
                     out_points[k, 0], out_points[k, 1], out_points[k, 2] = px, py, pz
                     out_distance[k] = (px - origin[0]) * n[0] + (py - origin[1]) * n[1] + (pz - origin[2]) * n[2]
@@ -384,14 +390,14 @@ def plane_extremal_step(samples, work, ports, surface):
     m = 0
     if n_active:
         m = plane_rings(io.poses, w.active, n_active, s.start, s.points_B, s.ring_start, s.ring_first, s.ringc_B,
-                        s.axis_B, s.parent_row, s.radius, f.origin, f.n, w.R, w.points, w.distance, w.normal,
+                        s.axis_B, s.parent_row, s.radius, f.origin, f.n, s.near, w.R, w.points, w.distance, w.normal,
                         w.sample, w.owner)
         for i in range(m):
             w.material[i] = f.region_material
     n_contact = contact_wrenches(m, w.distance, w.normal, w.material, w.sample, w.owner, io.poses, io.vels,
                                  io.joint_v, s.ringc_B, s.radial_B, s.axis_B, s.parent_row, s.screw_row, s.radius,
                                  s.lead_angle, s.hand, s.spin_dof, s.spin_mult, f.mats, s.v_eps, s.mode, s.ev_floor,
-                                 w.R, w.point, w.vel, w.force, w.fn, io.wrenches, io.screw_fn)
+                                 s.near, w.R, w.point, w.vel, w.force, w.fn, io.wrenches, io.screw_fn)
     _finish(w, io, n_active, m, n_contact)
 
 
@@ -466,7 +472,8 @@ def np_sum(a):
 
 Samples = record("Samples", ("broad_phase", "sphere_r", "start", "points_B", "mount_p", "ringc_B", "radial_B",
                              "axis_B", "parent_row", "screw_row", "radius", "lead_angle", "hand", "spin_dof",
-                             "spin_mult", "v_eps", "mode", "ev_floor", "ring_start", "ring_first", "cos_sep"))
+                             "spin_mult", "v_eps", "mode", "ev_floor", "ring_start", "ring_first", "cos_sep",
+                             "near", "lookahead_time"))
 SdfWork = record("SdfWork", ("active", "centres", "points", "distance", "normal", "material", "sample", "owner", "R",
                              "point", "vel", "force", "fn", "counts", "track", "seen_poses", "seen_vels",
                              "seen_joint_v", "ring_row", "ring_dir", "ext_points", "ext_row", "ext_distance",
@@ -569,7 +576,7 @@ def wrench_step(samples, work, ports, surface):
     n_contact = contact_wrenches(m, w.distance, w.normal, w.material, w.sample, w.owner, io.poses, io.vels,
                                  io.joint_v, s.ringc_B, s.radial_B, s.axis_B, s.parent_row, s.screw_row, s.radius,
                                  s.lead_angle, s.hand, s.spin_dof, s.spin_mult, surface.mats, s.v_eps, s.mode,
-                                 s.ev_floor, w.R, w.point, w.vel, w.force, w.fn, io.wrenches, io.screw_fn)
+                                 s.ev_floor, s.near, w.R, w.point, w.vel, w.force, w.fn, io.wrenches, io.screw_fn)
     _finish(w, io, w.counts[3], m, n_contact)
 
 
@@ -596,7 +603,7 @@ def jacobian_step(samples, work, ports, surface, d_twist, d_pose, on_link):
     s, w = samples, work
     return contact_jacobian_blocks(w.counts[4], w.distance, w.normal, w.material, w.owner, w.point, w.vel, ports.poses,
                                    s.axis_B, s.screw_row, s.parent_row, s.lead_angle, s.hand, surface.mats, s.v_eps,
-                                   s.mode, s.ev_floor, d_twist, d_pose, on_link)
+                                   s.mode, s.ev_floor, s.near, s.lookahead_time, d_twist, d_pose, on_link)
 
 
 @njit(cache=True)

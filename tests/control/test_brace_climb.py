@@ -193,7 +193,8 @@ def test_upright_brace_rolls_about_the_vertical_instead_of_climbing():
     """Why the scene tilts its brace: in the placed (upright) C every screw's surface direction â × ê_c is
     horizontal, so screws turning the same way make the two walls' frictions a yaw couple; the robot rolls
     about the vertical like a log between the walls, at Ω = ω r / (gap/2) when the contacts roll, and does
-    not rise (here it slides down while it rolls)."""
+    not rise. (Nor does it slide: converged, the centre of mass sinks ~2 mm in the 1.5 s, rosenbrock_w at fixed
+    0.25 ms and under error control alike; fixed 10 ms steps slid it 12 cm, which this test once asserted.)"""
     w, gap = 0.5, 0.35
     s = load_session("walls-brace-climb", sim_overrides={"duration": 1.5}, overrides=[
         UPRIGHT, "climb_start=1.0", f"climb_speed={w}", "spin_up=0.0",
@@ -214,7 +215,7 @@ def test_upright_brace_rolls_about_the_vertical_instead_of_climbing():
     assert rate == pytest.approx(w * r_screw / (gap / 2), rel=0.25)
     assert abs(psi[T < 1.0] - psi[0]).max() < 1e-3                             # braked: no roll
     z = np.asarray(r["robot.com"])[:, 2]
-    assert z.max() - z[0] < 5e-3 and z[-1] < z[0] - 0.05
+    assert z.max() - z[0] < 1e-3 and z[0] - z[-1] < 1e-2
 
 
 def test_too_little_squeeze_fails_and_the_evaluation_says_why():

@@ -38,13 +38,19 @@ def reg(registry):
     return registry
 
 
+def _fixed(params):
+    """The method's own fixed-step properties (order, stability function, where J is assembled) are measured at
+    fixed steps: step_control: fixed unless a test says otherwise."""
+    return {"step_control": "fixed", **(params or {})}
+
+
 def oscillator(tmp_path, reg, kind, dt, duration, omega=1.0, params=None):
     path = tmp_path / "osc.yaml"
     path.write_text(f"""
 sim:
   duration: {duration!r}
   dt: {dt!r}
-  integrator: {{name: rosenbrock_w, params: {json.dumps(params or {})}}}
+  integrator: {{name: rosenbrock_w, params: {json.dumps(_fixed(params))}}}
 components:
   osc: {{type: {kind}, params: {{omega: {omega!r}, x0: 1.0, v0: 0.0}}}}
 record: [osc.x, osc.v, osc.energy]
@@ -173,7 +179,7 @@ def _assembly_steps(tmp_path, reg, monkeypatch, params, times, levels, dt=0.01, 
     monkeypatch.setattr(Linearization, "assemble", lambda self, t: (at.append(t), real(self, t))[1])
     path = tmp_path / "forced.yaml"
     path.write_text(f"""
-sim: {{duration: {duration!r}, dt: {dt!r}, integrator: {{name: rosenbrock_w, params: {json.dumps(params)}}}}}
+sim: {{duration: {duration!r}, dt: {dt!r}, integrator: {{name: rosenbrock_w, params: {json.dumps(_fixed(params))}}}}}
 components:
   src: {{type: test_level, params: {{times: {times}, levels: {levels}}}}}
   osc: {{type: test_forced_oscillator, params: {{omega: 2.0, x0: 1.0, v0: 0.0}}}}
@@ -240,7 +246,7 @@ def test_refresh_on_sources_keeps_the_order(tmp_path, reg, substeps):
                   "refresh_substeps": substeps}
         path = tmp_path / "ramp.yaml"
         path.write_text(f"""
-sim: {{duration: {T!r}, dt: {dt!r}, integrator: {{name: rosenbrock_w, params: {json.dumps(params)}}}}}
+sim: {{duration: {T!r}, dt: {dt!r}, integrator: {{name: rosenbrock_w, params: {json.dumps(_fixed(params))}}}}}
 components:
   src: {{type: test_ramp_hold, params: {{until: {t0}}}}}
   osc: {{type: test_forced_oscillator, params: {{omega: {omega}, x0: 1.0, v0: 0.0}}}}
@@ -265,7 +271,66 @@ record: [osc.x]
 @pytest.mark.parametrize("params, key", [({"method": "ros3"}, "method"), ({"jacobian_every": 0}, "jacobian_every"),
                                          ({"jacobian_refresh": "always"}, "jacobian_refresh"),
                                          ({"refresh_window": -1.0}, "refresh_window"),
-                                         ({"refresh_substeps": 0}, "refresh_substeps")])
+                                         ({"refresh_substeps": 0}, "refresh_substeps"),
+                                         ({"step_control": "adaptive"}, "step_control"),
+                                         ({"atol_q": 0.0}, "atol_q"), ({"atol_v": -1.0}, "atol_v"),
+                                         ({"rtol": -0.1}, "rtol"), ({"h_min": 0.0}, "h_min")])
 def test_bad_params_name_the_key(params, key):
     with pytest.raises(ValidationError, match=key):
         RosenbrockW(params)
+
+
+# -- error control (step_control: error, the default) ---------------------------------------------------------
+
+def _controlled(tmp_path, reg, kind, tol, method="ros2", dt=0.5, T=10.0, omega=1.0, **extra):
+    params = {"method": method, "step_control": "error", "atol_q": tol, "atol_v": tol, "rtol": 0.0, **extra}
+    return oscillator(tmp_path, reg, kind, dt, T, omega, params)
+
+
+@pytest.mark.parametrize("method", ["ros2", "ros34pw2"])
+def test_error_control_tightens_the_error_with_the_tolerance(tmp_path, reg, method):
+    """The embedded estimate controls the local error of the lower-order solution: ros2's (order 1) ~ C h², so
+    h ~ tol^½ and the order-2 result's global error ~ h² ~ tol; ros34pw2's (order 2) ~ C h³, h ~ tol^⅓,
+    global error ~ h³ ~ tol. Either way the global error falls in proportion to the tolerance (slope 1 in
+    log-log, within the power-of-two ladder's quantisation of h), and every run ends on the base instants."""
+    tols = (1e-3, 1e-4, 1e-5, 1e-6)
+    errs, steps = [], []
+    for tol in tols:
+        _, r = _controlled(tmp_path, reg, "test_declared_oscillator", tol, method)
+        errs.append(max_error(r, 1.0))
+        steps.append(r.summary["integrator"]["steps"])
+        assert np.allclose(np.diff(r["t"]), 0.5)
+    slope = np.polyfit(np.log(tols), np.log(errs), 1)[0]
+    assert 0.6 < slope < 1.4, (slope, errs)
+    assert steps == sorted(steps) and steps[-1] > steps[0], steps
+
+
+def test_error_control_finds_the_explicit_limit_of_an_undeclared_stiff_term(tmp_path, reg):
+    """An oscillator that declares nothing is integrated explicitly by the W-method; at ω h = 50 fixed steps
+    blow up (|R| > 1), while error control shrinks the step below the explicit stability limit and keeps the
+    energy (½ω²x² + ½v² = ½ω² at the start) within the tolerance's reach."""
+    omega, dt, T = 100.0, 0.5, 2.0
+    _, fixed = oscillator(tmp_path, reg, "test_oscillator", dt, T, omega, {"method": "ros2"})
+    assert fixed.last_good_state is not None or np.abs(fixed["osc.x"]).max() > 1e3
+    _, r = _controlled(tmp_path, reg, "test_oscillator", 1e-4, dt=dt, T=T, omega=omega)
+    assert r.summary["completed"] and r.summary["integrator"]["rejected"] > 0
+    assert r.summary["integrator"]["h_smallest"] * omega < 2.0          # below the explicit limit
+    energy = 0.5 * omega ** 2 * np.asarray(r["osc.x"]) ** 2 + 0.5 * np.asarray(r["osc.v"]) ** 2
+    assert np.abs(energy / (0.5 * omega ** 2) - 1.0).max() < 0.05
+
+
+def test_error_control_that_cannot_meet_h_min_fails_the_run_naming_it(tmp_path, reg):
+    """A step that would have to be shorter than h_min stops the run as an integrator failure that names
+    h_min, the time and the tolerances, keeping the last good state."""
+    _, r = _controlled(tmp_path, reg, "test_oscillator", 1e-6, dt=0.5, T=2.0, omega=1000.0, h_min=1e-3)
+    assert not r.summary["completed"]
+    assert "h_min = 0.001" in r.summary["stop_reason"] and "atol_q" in r.summary["stop_reason"]
+    assert r.last_good_state is not None
+
+
+def test_substeps_are_refused_with_error_control():
+    with pytest.raises(ValidationError, match="refresh_substeps"):
+        RosenbrockW({"refresh_substeps": 4})
+    with pytest.raises(ValidationError, match="substeps"):
+        RosenbrockW({"substeps": 2})
+    RosenbrockW({"step_control": "fixed", "refresh_substeps": 4})        # fixed steps: allowed

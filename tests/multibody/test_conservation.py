@@ -140,7 +140,7 @@ def test_rosenbrock_w_keeps_momentum_to_its_order(run_scene, tmp_path, method, o
     urdf = snake_urdf(modules=3, screws="pair", twist=True)
     drift = {}
     for dt in (4e-3, 2e-3):
-        integ = f"{{name: rosenbrock_w, params: {{method: {method}}}}}"
+        integ = f"{{name: rosenbrock_w, params: {{method: {method}, step_control: fixed}}}}"
         _, res = _run(run_scene, tmp_path, urdf, amp=TORQUES, dt=dt, duration=0.5, integrator=integ)
         assert res.summary["completed"]
         drift[dt] = max(_momentum_drift(res))

@@ -153,11 +153,17 @@ def test_a_stiff_stop_is_stable_implicitly_where_rk4_blows_up(run_scene):
     q = res["robot.joint_q"][:, 0]
     assert np.all(q < 1.0 + 10 * 40.0 / 5e5)
     assert abs(q[-1] - (1.0 + 40.0 / 5e5)) < 1e-6
-    # without the look-ahead the step that meets the stop treats it explicitly: thrown off
-    _, res = _run(run_scene, tau=40.0, q0=0.999, dt=1e-2, duration=1.0, integrator="rosenbrock_w",
-                  stops="{enabled: true, stiffness: {bend_00: 5.0e5}, lookahead_steps: 0}")
+    # without the look-ahead a fixed step that meets the stop treats it explicitly: thrown off …
+    fixed = "{name: rosenbrock_w, params: {step_control: fixed}}"
+    no_lookahead = "{enabled: true, stiffness: {bend_00: 5.0e5}, lookahead_steps: 0}"
+    _, res = _run(run_scene, tau=40.0, q0=0.999, dt=1e-2, duration=1.0, integrator=fixed, stops=no_lookahead)
     q = res["robot.joint_q"][:, 0]
     assert not res.summary["completed"] or not np.all(np.abs(q) < 2.0)
+    # … while error control (the default) finds the stop by rejecting the step that overshoots it
+    _, res = _run(run_scene, tau=40.0, q0=0.999, dt=1e-2, duration=1.0, integrator="rosenbrock_w",
+                  stops=no_lookahead)
+    assert res.summary["completed"] and res.summary["integrator"]["rejected"] > 0
+    assert abs(res["robot.joint_q"][-1, 0] - (1.0 + 40.0 / 5e5)) < 1e-6
 
 
 def test_stops_are_off_by_default_and_report_their_values():
