@@ -12,6 +12,7 @@ from .registry import Registry, default_registry
 from .run_reports import add_reports
 from .run_files import prepare_out_dir
 from .simulator import RunResult, Simulator, write_run
+from .warm_up import warm_up
 from .yaml_source import dump_yaml
 
 
@@ -30,6 +31,7 @@ class Session:
         except Exception as e:
             raise ConfigError(f"bad parameters for integrator '{spec.name}': {e}", None, "sim.integrator.params") from None
         self.simulator = Simulator(self.plan, self.integrator)
+        warm_up(self.plan, self.integrator, resolved.sim.t0)      # compiled code loaded now, not in the run
         self.interrupted: dict | None = None
 
     # -- views ----------------------------------------------------------------

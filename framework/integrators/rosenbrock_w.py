@@ -228,6 +228,23 @@ class RosenbrockW(FixedStep):
     Params = RosenbrockWParams
 
     def _alloc(self, nx, ndx):
+        """Work arrays, the linearisation and every bound call, made once per system (a session's runs and
+        restarts reuse them, and with them the solves bound per factorisation); then this run's state."""
+        if getattr(self, "_built_for", None) is not self.sys:
+            self._build(nx, ndx)
+            self._built_for = self.sys
+        self.h_lu = None
+        self.age = 0
+        self._burst_until = -np.inf
+        self._event = False
+        self._t_left = math.inf                 # stage times are kept below it (error control: the base step's end)
+        self.level = 0                          # error control: the base step in 2^level steps (carried over)
+        self._stale = False                     # error control: J is not from the step's start
+        self.stats.update(jacobians=0, source_refreshes=0)
+        if self.p.step_control == "error":
+            self.stats.update(rejected=0, h_smallest=math.inf)
+
+    def _build(self, nx, ndx):
         sys = self.sys
         self.lin = Linearization(sys)
         self.lin.gamma_hint = GAMMA_ROS2 if self.p.method == "ros2" else ROS34PW2[0]
@@ -236,9 +253,6 @@ class RosenbrockW(FixedStep):
         self.U = np.zeros((4, ndx))
         self.rhs = np.zeros(ndx)
         self.dx = np.zeros(ndx)
-        self.h_lu = None
-        self.age = 0
-        self.stats.update(jacobians=0)
         # a stage's state goes straight into the plan's X (x0 keeps the step's start), as does the result
         self._to_x = sys.bind_integrate(self.x0, self.dx, sys.X)
         self._dexp_inv = sys.bind_dexp_inv(self.x0, self.dx, self.f1)
@@ -253,10 +267,6 @@ class RosenbrockW(FixedStep):
         self._rhs2 = bind(_ros2_rhs, self.f1, ka)
         self._result = bind(_ros2_result, ka, kb, self.h, self.dx)
         self._watched = self._sources() if self.p.jacobian_refresh == "on_sources" else ()
-        self._burst_until = -np.inf
-        self._event = False
-        self._t_left = math.inf                 # stage times are kept below it (error control: the base step's end)
-        self.stats.update(source_refreshes=0)
         # W is refactorised when h moves beyond float noise (t1 − t0 differs from dt in the last bits; a W-method
         # keeps its order with any matrix, so W from an h equal to round-off costs nothing in consistency)
         self._refactor = 1e-9
@@ -285,9 +295,6 @@ class RosenbrockW(FixedStep):
             self._solve_err = _nothing
         self._ros2_err = bind(_ros2_error, self.U[0], self.U[1], self.h, self.err)
         self._ratio = bind(_error_ratio, self.err_w, self.dx, self.x0, sys.X, self.atol, self.xv, float(self.p.rtol))
-        self.level = 0                  # the base step in 2^level steps (carried over base steps)
-        self._stale = False             # J is not from the step's start (a retry assembles it there)
-        self.stats.update(rejected=0, h_smallest=math.inf)
 
     def _sources(self):
         """(live, copy) of each numeric output read in the plan whose component has no inputs and no continuous

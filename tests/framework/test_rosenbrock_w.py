@@ -174,9 +174,6 @@ def _assembly_steps(tmp_path, reg, monkeypatch, params, times, levels, dt=0.01, 
     for cls in (Level, _forced(reg.component("test_declared_oscillator"))):
         if cls.type_name not in reg.components:
             reg.add_component(cls)
-    at = []
-    real = Linearization.assemble
-    monkeypatch.setattr(Linearization, "assemble", lambda self, t: (at.append(t), real(self, t))[1])
     path = tmp_path / "forced.yaml"
     path.write_text(f"""
 sim: {{duration: {duration!r}, dt: {dt!r}, integrator: {{name: rosenbrock_w, params: {json.dumps(_fixed(params))}}}}}
@@ -187,6 +184,9 @@ connections: [src.level -> osc.force]
 record: [osc.x]
 """)
     s = load_session(path, registry=reg)
+    at = []                         # the run's assemblies (not the session's warm-up step: framework/warm_up.py)
+    real = Linearization.assemble
+    monkeypatch.setattr(Linearization, "assemble", lambda self, t: (at.append(t), real(self, t))[1])
     r = s.run()
     assert r.summary["completed"]
     return [round(t / dt) for t in at], s.integrator.stats, [round(2 * t / dt) for t in at]

@@ -1,0 +1,42 @@
+"""Loading a plan's compiled code before its first timed step.
+
+Numba loads each compiled kernel from its on-disk cache the first time a process calls it, and a bound
+call (``kernel_args.bind``, ``linear_solve_kernels.bind``) types its arguments once: in a fresh process
+the first evaluations, Jacobian assembly, factorisation and solves of a run cost ~0.2 s of loading, a
+third of the default scene's 45 s at its speed. A session therefore takes one throwaway step of its
+continuous system when it is built (the build's cost, not the run's): the time-invariant components
+made, one derivative, one integrator step from the initial state, then the state put back. Only the
+continuous closure is evaluated (plan.f), never a sink, a discrete update, a gate or an edit, so no
+output leaves the process and no component's discrete state moves; whatever a component caches from it
+is checked against its inputs as on any evaluation. Best effort: an error here is left for the run to
+meet and report.
+"""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+
+logger = logging.getLogger("snakesim.run")
+
+
+def warm_up(plan, integrator, t0: float) -> None:
+    """One step of ``plan``'s continuous system with ``integrator`` from its initial state, undone."""
+    if not plan.nx:
+        return
+    X0, XD0 = plan.X.copy(), plan.XD.copy()
+    flag = plan.stop_flag
+    before = {k: getattr(flag, k) for k in type(flag).__slots__}
+    try:
+        for fn, x, u, y in plan.once:
+            fn(t0, x, u, y)
+        integrator.bind(plan)
+        integrator.advance(t0, t0 + plan.dt, plan.f(t0, plan.X))
+    except Exception as e:           # noqa: BLE001 - the run meets the same error and reports it
+        logger.debug("warm-up step failed (the run will report it): %s", e)
+    finally:
+        np.copyto(plan.X, X0)
+        np.copyto(plan.XD, XD0)
+        for k, v in before.items():  # a stop asked for during the throwaway step is not the run's
+            setattr(flag, k, v)
