@@ -13,7 +13,7 @@ environment activated, as the tour says. Left out, and why:
   tests/docs/test_ros2_readme.py runs it; ``ros2 ...`` lines need a ROS 2 installation;
 - ``export`` lines (they only configure that ROS 2 block).
 
-Durations: every ``snakesim run`` gets ``--duration 0.05`` appended (click keeps the last value, so
+Durations: every ``snakesim run`` gets ``--duration 0.04`` appended (click keeps the last value, so
 it also shortens ``--duration 20``): the commands are checked for running, not for physics, which
 their own tests check.
 """
@@ -31,7 +31,7 @@ from doc_blocks import blocks
 
 REPO = Path(__file__).resolve().parents[2]
 PAGE = "../README.md"
-SHORT = ["--duration", "0.05"]
+SHORT = ["--duration", "0.04"]     # whole steps of 1, 2, 4, 5, 10 and 20 ms
 SET_UP = ("python3 -m venv", "pip install", "source .venv/bin/activate")
 TESTED_ELSEWHERE = ("--ros2-commands", "python ros2_node.py")      # tests/docs/test_ros2_readme.py
 NEEDS_ROS = ("ros2 ", "export ")
