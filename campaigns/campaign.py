@@ -234,5 +234,5 @@ def run_campaign(plan: Plan, out: Path, backend, *, save_runs: bool = False, tim
 
 def _lost(task: RunTask, reason: str) -> dict:
     return {"run": task.index, "parameters": dict(task.parameters), "status": "error", "reason": reason,
-            "completed": False, "metrics": {}, "worker": None, "session_reused": False}
+            "outcome": "failure", "completed": False, "metrics": {}, "worker": None, "session_reused": False}
 

@@ -12,6 +12,7 @@ from pathlib import Path
 import click
 
 from snakesim.framework import SnakesimError, hookimpl
+from snakesim.framework.outcomes import SWEEP_RUN_FAILED
 
 
 def _positive(ctx, param, value):
@@ -53,7 +54,9 @@ def _positive(ctx, param, value):
 def sweep(assembly, dispersions, n, seed, out_dir, sets, config, duration, dt, integrator, workers, scheduler,
           dask_local, connect_timeout, run_timeout, save_runs, retry_failed, fresh, no_plots, quiet):
     """Run N variations of ASSEMBLY (a scene name or YAML path) with parameters drawn from a dispersion
-    file; write OUT/results.parquet and .csv (a row per run), summary.json, sensitivity.csv and plots."""
+    file; write OUT/results.parquet and .csv (a row per run, with its status, outcome and failure kind),
+    summary.json, sensitivity.csv and plots. Exits 0 when every run is a success (its status is in the
+    dispersion file's success list, default ok), 20 when at least one is not."""
     from .backends import dask_local as start_dask_local, dask_scheduler, local_pool
     from .campaign import prepare, run_campaign
     from .report import summarize
@@ -96,6 +99,12 @@ def sweep(assembly, dispersions, n, seed, out_dir, sets, config, duration, dt, i
         click.echo(f"  rho = {r['spearman_rho']:+.2f}  {r['parameter']} -> {r['metric']}", err=True)
     click.echo(f"wrote {out}/results.parquet, results.csv, summary.json, sensitivity.csv"
                + ("" if no_plots else ", hist.png, scatter.png, success_by_parameter.png"), err=True)
+    failed = summary["failed"]
+    if failed:
+        # a script or CI tells a campaign with failed runs from a clean one (framework/outcomes.py)
+        click.echo(f"{failed} of {summary['runs']} runs not a success (status not in "
+                   f"{list(plan.dispersions.success)}): exit status {SWEEP_RUN_FAILED}", err=True)
+        sys.exit(SWEEP_RUN_FAILED)
 
 
 @hookimpl

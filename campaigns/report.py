@@ -6,7 +6,8 @@
 ``scatter.png``               each metric against each dispersed parameter (successful runs)
 ``success_by_parameter.png``  success rate per parameter bin (10 equal-count bins; a bar per value
                               for parameters with few distinct values)
-``summary.json``              counts per status, success rate, the 20 strongest sensitivities
+``summary.json``              counts per status, success rate, failed runs (status not in ``success``) and
+                              counts per failure kind, the 20 strongest sensitivities
 """
 
 from __future__ import annotations
@@ -167,8 +168,11 @@ def summarize(table, out: Path, success: tuple[str, ...] = ("ok",), plots: bool 
     lines = ["parameter,metric,spearman_rho,p_value,n"]
     lines += [f"{r['parameter']},{r['metric']},{r['spearman_rho']:.6g},{r['p_value']:.6g},{r['n']}" for r in ranking]
     atomic_write(out / "sensitivity.csv", "\n".join(lines) + "\n")
+    kinds = table.column("failure_kind").to_pylist() if "failure_kind" in table.column_names else []
+    by_kind = {k: kinds.count(k) for k in sorted({k for k in kinds if isinstance(k, str)})}
     summary = {"runs": len(status), "by_status": counts, "success": list(success),
                "success_rate": float(ok.mean()) if len(ok) else float("nan"),
+               "failed": int((~ok).sum()), "by_failure_kind": by_kind,
                "sensitivity_top": ranking[:20]}
     if plots and len(status):
         summary["plots"] = plot(table, params, metrics, ok, out)

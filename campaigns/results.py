@@ -21,7 +21,7 @@ from snakesim.framework.errors import SnakesimError
 
 RECORDS = "runs.jsonl"
 IDENTITY = "campaign.json"
-FIRST_COLUMNS = ("run", "status", "reason", "stop_reason", "completed")
+FIRST_COLUMNS = ("run", "status", "outcome", "failure_kind", "reason", "stop_reason", "completed")
 RUN_COLUMNS = ("sim_time_s", "wall_time_s", "real_time_factor", "steps", "build_s", "run_wall_s",
                "cpu_s", "session_reused", "worker")
 # columns that differ between two executions of the same campaign (timing and placement)

@@ -4,7 +4,9 @@ This is the only code that runs on workers, whichever back end: a local
 process or a Dask worker calls :func:`execute` with a :class:`RunTask` and gets
 a plain JSON-able dict back. It never raises: a failing build or run, a run
 that diverges or one that exceeds its wall-time limit is a record with its
-``status`` and ``reason`` (the campaign goes on).
+``status`` and ``reason`` (the campaign goes on). A run that ran records the
+summary's ``outcome`` (success | failure) and ``failure_kind``
+(framework/outcomes.py); a build error or a timeout is a failure with no kind.
 
 Reuse: a worker keeps its registry (plugins loaded once), its imports and
 numba's compiled kernels across runs, and the last few built Sessions keyed by
@@ -90,10 +92,17 @@ def _session(task: RunTask):
     return s, False
 
 
-def _status(summary: dict, last_good) -> str:
-    if summary.get("completed"):
+#: failure kinds (framework/outcomes.py) whose runs are recorded as ``diverged``; other failures are ``stopped``
+DIVERGED_KINDS = ("blow_up", "non_finite", "integrator", "numerical")
+
+
+def _status(summary: dict) -> str:
+    """``ok`` for a run whose outcome is a success (its duration reached, or a success stop),
+    ``diverged`` for a numerical failure (blow-up, non-finite state, integrator), ``stopped`` for
+    any other failure (a scene's stop rule, a guard, a mobility failure, the memory limit)."""
+    if summary.get("outcome") == "success":
         return "ok"
-    return "diverged" if last_good is not None else "stopped"
+    return "diverged" if summary.get("failure_kind") in DIVERGED_KINDS else "stopped"
 
 
 def execute(task: RunTask) -> dict:
@@ -120,24 +129,25 @@ def execute(task: RunTask) -> dict:
             raise RunTimeout(f"wall-time limit {task.timeout_s:g} s passed while building")
         result = session.run(out_dir=task.run_dir, progress=watchdog)
         sm = result.summary
-        status = _status(sm, result.last_good_state)
+        status = _status(sm)
         rec.update(status=status, reason=None if status == "ok" else sm["stop_reason"],
-                   stop_reason=sm["stop_reason"], completed=bool(sm["completed"]), sim_time_s=sm["sim_time_s"],
+                   stop_reason=sm["stop_reason"], outcome=sm["outcome"], failure_kind=sm["failure_kind"],
+                   completed=bool(sm["completed"]), sim_time_s=sm["sim_time_s"],
                    wall_time_s=sm["wall_time_s"], real_time_factor=sm["real_time_factor"], steps=sm["steps"])
         try:
             rec["metrics"] = evaluate(task.metrics, result.log)
         except Exception as e:          # a metric that cannot be computed is this run's error, not the campaign's
             rec.update(status="error", reason=f"metrics: {type(e).__name__}: {e}", metrics={})
     except RunTimeout as e:
-        rec.update(status="timeout", reason=str(e), completed=False, metrics={})
+        rec.update(status="timeout", reason=str(e), outcome="failure", completed=False, metrics={})
         _cache().pop((task.scene, task.sets), None)       # stopped mid-run: do not reuse it
     except SnakesimError as e:
-        rec.update(status="error", reason=f"{type(e).__name__}: {e}", completed=False, metrics={})
+        rec.update(status="error", reason=f"{type(e).__name__}: {e}", outcome="failure", completed=False, metrics={})
         _cache().pop((task.scene, task.sets), None)
     except Exception as e:              # noqa: BLE001  a component's bug must not end the campaign
         tb = traceback.extract_tb(e.__traceback__)[-1]
         rec.update(status="error", reason=f"{type(e).__name__}: {e} ({tb.filename}:{tb.lineno})",
-                   completed=False, metrics={})
+                   outcome="failure", completed=False, metrics={})
         _cache().pop((task.scene, task.sets), None)
     rec.setdefault("session_reused", False)
     rec["run_wall_s"] = time.perf_counter() - t0

@@ -9,7 +9,11 @@ An assembly file has these top-level keys (all optional)::
     components:  {name: {type: TYPE, params: {...}, rate: HZ, uses: {slot: PROVIDER}}}
     connections: ["a.y -> b.u", "a.y -> b.u, c.u", {connect: "...", repeat: N}]
     record:      ["a.y", ...]
-    stop:        [{signal: a.y, index: 0, above: 1.0, reason: "..."}]
+    stop:        [{signal: a.y, index: 0, above: 1.0, reason: "...", outcome: failure}]
+
+A ``stop:`` entry ends the run when its bound holds; ``outcome`` says what that means:
+``failure`` (the default: the robot fell, contact blew up) or ``success`` (the run reached its goal);
+see :mod:`.outcomes` for the summary's ``outcome`` and the exit codes.
 
 Included components are named ``PREFIX/name``; inside a repeated include and a
 repeated connection, ``${i}`` is the repetition index (0-based). Expansion
@@ -23,6 +27,7 @@ from __future__ import annotations
 import difflib
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
@@ -79,6 +84,8 @@ class StopSpec(_Strict):
     below: float | None = None
     abs_above: float | None = None
     reason: str | None = None
+    outcome: Literal["success", "failure"] = Field(
+        "failure", description="what the stop means: the run failed (default) or reached its goal")
 
 
 class IncludeSpec(_Strict):

@@ -17,6 +17,7 @@ from pathlib import Path
 import click
 
 from .errors import SnakesimError
+from .outcomes import exit_codes_help, run_exit_code
 from .run_reports import report_lines
 
 # registry, assembly and session load inside the commands: `snakesim --help` must not pay for
@@ -144,8 +145,10 @@ def run(assembly, config, sets, duration, dt, integrator, realtime, out_dir, ove
         **shorthands):
     """Run ASSEMBLY (a YAML path or a scene name; default: the default scene).
 
-    Ctrl-C or SIGTERM ends the run at the next step and still writes --out (the summary says it was
-    interrupted, and when); a second one stops at once."""
+    Exits 0 when the run succeeds (its duration reached, or a stop declared a success) and with one
+    code per kind of failure otherwise (summary.json: outcome, failure_kind): EXIT_CODES. Ctrl-C or
+    SIGTERM ends the run at the next step and still writes --out (the summary says it was interrupted,
+    and when), exit 128 + signal; a second one stops at once."""
     from .run_files import check_writable_file, prepare_out_dir
 
     with _Interrupts() as interrupts:
@@ -174,6 +177,7 @@ def run(assembly, config, sets, duration, dt, integrator, realtime, out_dir, ove
                        err=True)
             sys.exit(130)
     sm = result.summary
+    code = run_exit_code(sm)        # 0, a failure kind's code (framework/outcomes.py) or 128 + signal
     if not quiet:
         click.echo(f"\r{' ' * 70}\r{sm['stop_reason']}: {sm['sim_time_s']:.4g} s simulated in {sm['wall_time_s']:.3g} s "
                    f"({sm['real_time_factor']:.3g}x real time, {sm['steps']} steps)", err=True)
@@ -187,10 +191,13 @@ def run(assembly, config, sets, duration, dt, integrator, realtime, out_dir, ove
         what = "the signals so far and the last good state" if result.last_good_state is not None else "the signals so far"
         click.echo(f"{sm['stop_reason']}: nothing was saved (no --out); run again with --out DIR to keep {what}, "
                    "a summary and the config", err=True)
-    if "interrupted" in sm:
-        sys.exit(128 + int(getattr(signal, sm["interrupted"]["signal"])))
-    if result.last_good_state is not None:  # blew up or the integrator gave up
-        sys.exit(3)
+    if code:
+        if not quiet and "interrupted" not in sm:
+            click.echo(f"failure ({sm['failure_kind']}): exit status {code}", err=True)
+        sys.exit(code)
+
+
+run.help = run.help.replace("EXIT_CODES", exit_codes_help())      # the one table: framework/outcomes.py
 
 
 class _Interrupts:

@@ -122,13 +122,24 @@ class ContinuousState:
 
 
 class StopFlag:
-    """Shared, mutable: a component asks the run to end by setting a reason."""
+    """Shared, mutable: a component asks the run to end by setting a reason, with the stop's outcome
+    (``success`` | ``failure``) and, for a failure, its kind (:mod:`.outcomes`)."""
 
-    __slots__ = ("reason", "source")
+    __slots__ = ("reason", "source", "outcome", "kind")
 
     def __init__(self):
+        self.clear()
+
+    def clear(self) -> None:
         self.reason: str | None = None
         self.source: str | None = None
+        self.outcome: str | None = None
+        self.kind: str | None = None
+
+    def set(self, reason: str, source: str, outcome: str, kind: str | None) -> None:
+        """The first request wins (later ones in the same step are ignored)."""
+        if self.reason is None:
+            self.reason, self.source, self.outcome, self.kind = reason, source, outcome, kind
 
 
 class Component(Generic[P]):
@@ -268,6 +279,19 @@ class Component(Generic[P]):
     def has_hold(cls) -> bool:
         return cls.hold is not Component.hold
 
+    def check(self, t: float, u, restart: bool) -> None:
+        """Optional: a once-per-base-step guard. Called at every base tick t after that tick's outputs
+        are computed and recorded and before the stop conditions are tested, never inside an
+        integrator's stages; it may compare the state at t with what it kept from the previous tick and
+        call :meth:`stop`. ``restart`` is True at the first tick of a run and at the tick after a state
+        edit (no previous tick to compare with). Enabled per instance by :meth:`has_check`; a component
+        that has one is never pruned."""
+
+    def has_check(self) -> bool:
+        """Whether the simulator calls :meth:`check` (an instance's choice: a guard may be switched off
+        by a parameter, and then costs nothing)."""
+        return type(self).check is not Component.check
+
     def edit_state(self, t: float, u, edit) -> None:
         """Optional: called once per base step right after the gates (``hold``), before the integrator
         advances past t; it may request state changes through ``edit`` (a
@@ -321,10 +345,17 @@ class Component(Generic[P]):
         return None
 
     # -- services ------------------------------------------------------------
-    def stop(self, reason: str) -> None:
-        """End the run after this step with ``reason`` (e.g. a mobility failure)."""
-        if self._stop.reason is None:
-            self._stop.reason, self._stop.source = reason, self.name
+    def stop(self, reason: str, outcome: str = "failure", kind: str | None = None) -> None:
+        """End the run after this step with ``reason``.
+
+        ``outcome``: ``"failure"`` (the default: a guard, a mobility failure) or ``"success"`` (the
+        run did what it was for: an evaluation reaching its goal; ``snakesim run`` exits 0). A failure's
+        ``kind`` is one of :data:`~.outcomes.FAILURE_KINDS` (default ``"guard"``); it picks the exit
+        code and goes into the summary's ``failure_kind``."""
+        from .outcomes import check_stop
+
+        kind = check_stop(outcome, kind, "guard")     # a wrong outcome or kind is the caller's bug: raise
+        self._stop.set(reason, self.name, outcome, kind)
 
     @classmethod
     def has_manifold_state(cls) -> bool:

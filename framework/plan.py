@@ -90,6 +90,7 @@ class Plan:
     report: dict = field(default_factory=dict)
     holds: tuple[tuple, ...] = ()                 # (component.hold, its inputs): gates called every base step
     edits: tuple[tuple, ...] = ()                 # (component.edit_state, its inputs): state-edit requesters
+    checks: tuple[tuple, ...] = ()                # (component.check, its inputs): once-per-base-step guards
     io: dict = field(default_factory=dict)        # component -> (state view, inputs, outputs): for Jacobians
 
     # -- the continuous system the integrators see ------------------------------
@@ -513,7 +514,8 @@ def build(resolved: Resolved, registry) -> Plan:
     cstates = {n: c.continuous_state() for n, c in comps.items()}
     dstates = {n: c.discrete_state() for n, c in comps.items()}
     roots = {n for n, c in comps.items()
-             if c.is_sink or c.has_hold() or c.has_edit_state() or cstates[n] is not None or dstates[n] is not None}
+             if c.is_sink or c.has_hold() or c.has_edit_state() or c.has_check() or cstates[n] is not None
+             or dstates[n] is not None}
     roots |= {r.comp for r in recorded + stopped}
     pruned = _prune(comps, sources, roots)
     comps = {n: c for n, c in comps.items() if n not in pruned}
@@ -553,6 +555,7 @@ def build(resolved: Resolved, registry) -> Plan:
                           if phase % periods[c.name] == 0) for phase in range(n_phases))
     holds = tuple((c.hold, u_of[n]) for n, c in comps.items() if c.has_hold())
     edits = tuple((c.edit_state, u_of[n]) for n, c in comps.items() if c.has_edit_state())
+    checks = tuple((c.check, u_of[n]) for n, c in comps.items() if c.has_check())
     derivs = tuple((s.comp.derivative, x_of[s.comp.name], u_of[s.comp.name], dx_of[s.comp.name]) for s in slices)
     stops = tuple(cond for spec, ref, w in stop_refs for cond in compile_stop(spec, ref, out_buffers[ref], w))
 
@@ -579,4 +582,4 @@ def build(resolved: Resolved, registry) -> Plan:
                 once=once, n_phases=n_phases, X=X, DX=DX, XD=XD, slices=tuple(slices), dslices=dslices,
                 n_euclid_x=n_euclid, stop_flag=stop_flag, dt=dt, record_refs=tuple(recorded),
                 record_every=record_every, stops=stops, used=used, caches=caches, report=report, holds=holds,
-                edits=edits, io={n: (x_of.get(n, xd_of.get(n)), u_of[n], y_of[n]) for n in comps})
+                edits=edits, checks=checks, io={n: (x_of.get(n, xd_of.get(n)), u_of[n], y_of[n]) for n in comps})

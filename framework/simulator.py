@@ -19,6 +19,17 @@ At each base tick k (t = t0 + k·dt, never accumulated):
      its update), naming the component and port, and a linear-algebra failure
      (``LinAlgError``) in a component or the integrator, naming which.
 
+Between 2 and the stop conditions, components' once-per-base-step guards
+(``Component.check``: the multibody's blow-up guard) look at the state at t.
+
+Every run ends with an ``outcome`` in its summary (:mod:`.outcomes`): ``success`` when it
+reached its duration or a stop declared a success, otherwise ``failure`` with a
+``failure_kind``: ``stop_rule`` (a scene's stop: entry), ``guard`` / ``mobility`` /
+``blow_up`` (a component's stop), ``non_finite``, ``integrator``, ``numerical`` (a
+component's LinAlgError), ``memory_limit``, ``interrupted`` (``request_stop``). When a
+failure and a success stop hold at the same tick, the failure wins. ``completed`` keeps
+its meaning: the run reached its duration (no stop of either outcome).
+
 The recording grows in chunks (:mod:`.recorder`); with ``out_dir`` each full chunk is
 appended to ``signals.csv`` as it fills (``write_run`` adds the rest), so a killed run
 keeps its signals up to the last full chunk. A recording that reaches the memory limit
@@ -50,6 +61,7 @@ import numpy as np
 
 from .errors import SnakesimError
 from .limits import step_count
+from .outcomes import FAILURE, INTERRUPTED, SUCCESS
 from .recorder import Recorder
 from .state_edit import StateEdit
 from .stiffness import step_check
@@ -83,11 +95,10 @@ class Simulator:
         self.step_check: dict | None = None
 
     def request_stop(self, reason: str, source: str = "run") -> None:
-        """End the run at the next step boundary (safe from a signal handler: it only sets the stop flag)."""
+        """End the run at the next step boundary (safe from a signal handler: it only sets the stop flag);
+        the run's outcome is a failure of kind ``interrupted``."""
         self.requested = (reason, source)
-        flag = self.plan.stop_flag
-        if flag.reason is None:
-            flag.reason, flag.source = reason, source
+        self.plan.stop_flag.set(reason, source, FAILURE, INTERRUPTED)
 
     def run(self, duration: float, t0: float = 0.0, progress=None, realtime: bool = False,
             out_dir: Path | None = None) -> RunResult:
@@ -109,6 +120,9 @@ class Simulator:
         if plan.nx:
             integ.bind(plan)      # fresh work arrays, step size and Jacobian
         X_good, XD_good = X.copy(), XD.copy()
+        # the good state one base step earlier (swapped with X_good, never copied): a blow-up flagged at t
+        # (kind blow_up) keeps the state at the start of the step that gained the energy
+        X_prev, XD_prev = X.copy(), XD.copy()
         for fn, x, u, y in plan.once:
             fn(t0, x, u, y)
         if self.step_check is None:     # the stiffest mode vs the step: once (time-invariant inputs known now)
@@ -118,9 +132,13 @@ class Simulator:
         passes = tuple(m + plan.derivs for m in plan.major) if has_cont else plan.major
         updates, n_phases, rec_every = plan.updates, plan.n_phases, plan.record_every
         stops, flag, DX, advance = plan.stops, plan.stop_flag, plan.DX, integ.advance
-        flag.reason, flag.source = self.requested or (None, None)
+        flag.clear()
+        if self.requested:
+            flag.set(*self.requested, FAILURE, INTERRUPTED)
         sink_checks, record = self.sink_checks, log.record
         stop_reason, bad = None, None
+        kind = None               # the failure kind when the run ends in a failure (outcomes.py)
+        checks, restart = plan.checks, True
         isfinite, copyto = math.isfinite, np.copyto
         holds, edits = plan.holds, plan.edits
         editor = StateEdit(plan, self.X0, self.XD0) if edits else None
@@ -131,7 +149,7 @@ class Simulator:
         held = 0.0                # wall s spent in holds (not lag for realtime pacing)
         warmup = 0.0              # wall s the first step took beyond dt (lazy opening; not lag either)
         max_lag, next_lag_warn = 0.0, wall0
-        t_good = t = t0
+        t_prev = t_good = t = t0
         k = 0
         for k in range(n_steps + 1):
             t = t0 + k * dt
@@ -141,27 +159,38 @@ class Simulator:
                     fn(t, x, u, y)
             except (np.linalg.LinAlgError, FloatingPointError) as e:
                 stop_reason, bad = f"component {_name_of(fn)} failed at t = {t:.6g} s: {type(e).__name__}: {e}", True
+                kind = "numerical"
                 break
             if k % rec_every == 0:
                 bad_out = record(t)
                 if bad_out is not None:
-                    if log.limit_reached:       # the row is kept; a stop, not a blow-up
-                        stop_reason = bad_out
+                    if log.limit_reached:       # the row is kept; a stop, not a blow-up (but no full run either)
+                        stop_reason, kind = bad_out, "memory_limit"
                     else:
-                        stop_reason, bad = f"{bad_out} at t = {t:.6g} s", True
+                        stop_reason, bad, kind = f"{bad_out} at t = {t:.6g} s", True, "non_finite"
                     break
             for what, v, nan_ok in sink_checks[phase]:
                 if not isfinite(v.dot(v)) and (np.isinf(v).any() if nan_ok else not np.isfinite(v).all()):
-                    stop_reason, bad = f"{what} at t = {t:.6g} s ({_bad_values(v)})", True
+                    stop_reason, bad, kind = f"{what} at t = {t:.6g} s ({_bad_values(v)})", True, "non_finite"
                     break
             if bad:
                 break
+            if checks:
+                for fn, u in checks:
+                    fn(t, u, restart)
+                restart = False
             for cond in stops:
                 if cond.hit():
-                    stop_reason = f"stop condition: {cond.reason} at t = {t:.6g} s"
-                    break
-            if flag.reason is not None:
+                    if cond.outcome == FAILURE:       # a failure outranks a success met at the same tick
+                        stop_reason, kind = f"stop condition: {cond.reason} at t = {t:.6g} s", "stop_rule"
+                        break
+                    if stop_reason is None:
+                        stop_reason = f"stop condition: {cond.reason} at t = {t:.6g} s"
+            # a component's stop (or an interrupt) names its source; it wins unless it is a success
+            # and a failing stop condition holds at the same tick
+            if flag.reason is not None and (kind is None or flag.outcome == FAILURE):
                 stop_reason = f"{flag.source}: {flag.reason} at t = {t:.6g} s"
+                kind = flag.kind
             if stop_reason or k == n_steps:
                 break
             for fn, xd, u in updates[phase]:
@@ -176,12 +205,13 @@ class Simulator:
                     fn(t, u, editor)
                 if editor.requests:
                     n_edits += 1
-                    stop_reason, bad = self._edit_step(editor, t, dt)
+                    stop_reason, bad, kind = self._edit_step(editor, t, dt)
                     if stop_reason:
                         break
                     copyto(X_good, X)
                     copyto(XD_good, XD)
-                    t_good = t + dt
+                    t_prev = t_good = t + dt      # no earlier state belongs to this one
+                    restart = True        # guards compare nothing across an edit
                     continue              # the edited state is the state at t + dt
             if has_cont:
                 try:
@@ -189,22 +219,24 @@ class Simulator:
                 except (SnakesimError, FloatingPointError, np.linalg.LinAlgError) as e:
                     # e.g. an adaptive step collapsing, a singular matrix: stop like a blow-up, keeping the
                     # last good state
-                    bad = True
+                    bad, kind = True, "integrator"
                     stop_reason = f"integrator {integ.name} failed after t = {t:.6g} s{_where(e)}: {_what(e)}"
                     break
             # X·X is finite iff every element is (an overflow to inf only sends it to the exact test)
             if has_disc:
                 if not (isfinite(X.dot(X) + XD.dot(XD)) or (np.isfinite(X).all() and np.isfinite(XD).all())):
-                    bad = self._offender()
+                    bad, kind = self._offender(), "non_finite"
                     stop_reason = f"non-finite state in component '{bad[0]}' after t = {t:.6g} s ({bad[1]})"
                     break
+                XD_prev, XD_good = XD_good, XD_prev
                 copyto(XD_good, XD)
             elif not (isfinite(X.dot(X)) or np.isfinite(X).all()):
-                bad = self._offender()
+                bad, kind = self._offender(), "non_finite"
                 stop_reason = f"non-finite state in component '{bad[0]}' after t = {t:.6g} s ({bad[1]})"
                 break
+            X_prev, X_good = X_good, X_prev
             copyto(X_good, X)
-            t_good = t + dt
+            t_prev, t_good = t_good, t + dt
             if progress is not None and (k & 255) == 0:
                 now = time.perf_counter()
                 if now >= next_report:
@@ -237,7 +269,9 @@ class Simulator:
             "dt_s": dt,
             "t_end_s": t,
             "stop_reason": stop_reason or "duration reached",
-            "completed": stop_reason is None,
+            "completed": stop_reason is None,        # reached its duration: no stop of either outcome
+            "outcome": FAILURE if kind is not None else SUCCESS,
+            "failure_kind": kind,
             "integrator": {"name": integ.name, **integ.stats} if has_cont else None,
         }
         if self.step_check:
@@ -249,6 +283,8 @@ class Simulator:
         if realtime:
             summary["realtime_max_lag_s"] = max_lag
         last_good = None
+        if kind == "blow_up" and not bad and t_prev < t_good:     # the state before the step that blew up
+            bad, X_good, XD_good, t_good = True, X_prev, XD_prev if has_disc else XD_good, t_prev
         if bad:
             last_good = {"t": t_good, "X": X_good.copy(), "XD": XD_good.copy(),
                          "components": {s.comp.name: X_good[s.x].copy() for s in plan.slices}}
@@ -257,23 +293,23 @@ class Simulator:
 
     def _edit_step(self, editor: StateEdit, t: float, dt: float):
         """One base step whose result is the edited state: integrated first unless a reset replaces the
-        whole state, then the requests applied and the integrator restarted. (stop reason, bad) or
-        (None, None)."""
+        whole state, then the requests applied and the integrator restarted. (stop reason, bad, failure
+        kind) or (None, None, None)."""
         plan, integ = self.plan, self.integrator
         if plan.nx and not editor.resets:
             try:
                 integ.advance(t, t + dt, plan.DX)
             except (SnakesimError, FloatingPointError, np.linalg.LinAlgError) as e:
                 editor.requests.clear()
-                return f"integrator {integ.name} failed after t = {t:.6g} s{_where(e)}: {_what(e)}", True
+                return f"integrator {integ.name} failed after t = {t:.6g} s{_where(e)}: {_what(e)}", True, "integrator"
         for line in editor.apply():
             logger.info("state edit at t = %.6g s: %s", t + dt, line)
         if not (np.isfinite(plan.X).all() and np.isfinite(plan.XD).all()):
             bad = self._offender()
-            return f"non-finite state in component '{bad[0]}' after t = {t:.6g} s ({bad[1]})", bad
+            return f"non-finite state in component '{bad[0]}' after t = {t:.6g} s ({bad[1]})", bad, "non_finite"
         if plan.nx:
             integ.restart()
-        return None, None
+        return None, None, None
 
     def _offender(self) -> tuple[str, str]:
         plan = self.plan

@@ -1,4 +1,7 @@
-"""Stop conditions compiled against the plan's output buffers (``stop:`` in an assembly)."""
+"""Stop conditions compiled against the plan's output buffers (``stop:`` in an assembly).
+
+Each entry declares its ``outcome`` (``failure`` by default, or ``success``): a failure ends the run
+with failure kind ``stop_rule`` (:mod:`.outcomes`)."""
 
 from __future__ import annotations
 
@@ -18,6 +21,7 @@ class StopCondition:
     op: str                   # above | below | abs_above
     value: float
     reason: str
+    outcome: str = "failure"  # success | failure (the entry's ``outcome:``; failure kind "stop_rule")
 
     def __post_init__(self):
         # ``hit()``: True when the condition holds; made once for this buffer, index and bound
@@ -56,5 +60,5 @@ def compile_stop(spec, ref: PortRef, buf, where) -> list[StopCondition]:
         v = getattr(spec, op)
         if v is not None:
             label = f"{ref}{'' if spec.index is None else spec.index} {op.replace('_', ' ')} {v:g}"
-            out.append(StopCondition(label, flat, index, op, float(v), spec.reason or label))
+            out.append(StopCondition(label, flat, index, op, float(v), spec.reason or label, spec.outcome))
     return out

@@ -124,7 +124,7 @@ class MobilityMonitor(Component[MobilityParams]):
         if fail and self.p.stop_on_failure:
             j = int(np.argmax(tilt))
             self.stop(f"mobility failure: {self.tilt_names[j]} tilted {math.degrees(worst):.1f} deg from the "
-                      f"vertical ({self.p.vertical}), limit {math.degrees(self.p.max_tilt):.1f} deg")
+                      f"vertical ({self.p.vertical}), limit {math.degrees(self.p.max_tilt):.1f} deg", kind="mobility")
         y.contact_made[...] = x[CONTACT]
         y.t_contact[...] = x[T_CONTACT] if x[CONTACT] else np.nan
         y.hold_time[...] = x[HOLD]

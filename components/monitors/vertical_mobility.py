@@ -187,7 +187,7 @@ class VerticalMobilityEvaluation(Component[VerticalMobilityParams]):
             w.fail_reason = (f"mobility failure: {self.tilt_names[j]} tilted {math.degrees(worst):.1f} deg from the "
                              f"vertical ({p.vertical}), limit {math.degrees(p.max_tilt):.1f} deg")
             if p.stop_on_failure:
-                self.stop(w.fail_reason)
+                self.stop(w.fail_reason, kind="mobility")
         h = float(u.link_poses[self._ref, :3] @ self._up)
         F = float(np.sum(u.normal_force))
         if not xd[CONTACT]:
@@ -224,7 +224,8 @@ class VerticalMobilityEvaluation(Component[VerticalMobilityParams]):
         }
         if x[FAILED]:
             r["failure"] = {"failed": True, "time_s": float(x[T_FAIL]), "reason": cache.fail_reason}
-        elif summary is not None and not summary.get("completed", True):
+        elif summary is not None and summary.get("outcome", "success" if summary.get("completed", True)
+                                                 else "failure") == "failure":   # a success stop is no failure
             r["failure"] = {"failed": True, "time_s": summary.get("t_end_s"), "reason": summary.get("stop_reason")}
         else:
             r["failure"] = {"failed": False, "time_s": None, "reason": None}

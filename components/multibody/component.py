@@ -60,6 +60,13 @@ Joint stops (``joint_stops: {enabled: true}``, off by default): a one-sided spri
 limited joint's URDF position limits, added to the generalised force before the forward dynamics,
 its slopes in the implicit step's Jacobian (joint_stops.py).
 
+Blow-up guard (``blowup_guard: {enabled: true, factor: 10, floor: 0.2}``, on by default): once per
+base step (``check``, never in the integrator's stages) the robot's kinetic energy gain over the step
+is compared with what gravity (exactly) and the joint torques, joint stops and link wrenches (their
+power at the step's two ends, times h, times ``factor``) can supply; more than that by ``floor`` J/kg
+stops the run as a failure of kind ``blow_up`` naming the step and the link whose kinetic energy rose
+the most (blowup_guard.py), before an explicit integrator's runaway reaches a non-finite state.
+
 Links (nl) are the URDF's <link> elements in document order, massless
 frames included; DOF joints (nj) the moving joints that are not mimics, in
 URDF order (``robot.links`` and ``robot.joints``; with the usual
@@ -98,6 +105,7 @@ from snakesim.framework import Component, ContinuousState, Input, Output, Provid
 from . import joint_values
 from ..kernel_args import bind
 from ..port_roles import JOINT_POSITIONS, JOINT_VELOCITIES, JOINT_WRENCHES, LINK_POSES, LINK_VELOCITIES
+from .blowup_guard import BlowupGuardParams, blow_up_reason
 from .joint_stops import JointStopsParams, build as build_joint_stops
 from .lie_kernels import dexp_inv6, integrate_state, joint_layout
 from .linearization import mechanical_block
@@ -131,6 +139,10 @@ class MultibodyParams(RobotSource):
                             "screw_pairs is mimic_crba")
     joint_stops: JointStopsParams = Field(default_factory=JointStopsParams,
                                           description="end stops at the URDF position limits (joint_stops.py)")
+    blowup_guard: BlowupGuardParams = Field(default_factory=BlowupGuardParams,
+                                            description="stop the run when a step's kinetic energy gain is more than "
+                                                        "the joints, external wrenches and gravity can supply "
+                                                        "(blowup_guard.py; failure kind blow_up)")
 
 
 def _names(suffixes):
@@ -237,6 +249,7 @@ class Multibody(Component[MultibodyParams]):
         self._x0 = joint_values.initial_state(robot, p, model)   # validated here, so errors name the component
         self._lie = joint_layout(model)          # integrate's joint layout (None: a joint lie_kernels lacks)
         self._stops = build_joint_stops(self, p.joint_stops)     # None when off
+        self._mass = float(ta.mass.sum())                        # kg, the links' (the guard's floor is per kg)
 
     def joint_inertia(self) -> np.ndarray:
         """Apparent inertia of each DOF joint (robot.joints order) at the initial state, 1 / (M⁻¹)_ii with
@@ -318,6 +331,18 @@ class Multibody(Component[MultibodyParams]):
                                       "v": Selection(self._nv + np.arange(self._nv))}
         return sel.get(port)
 
+    # -- the blow-up guard (blowup_guard.py): once per base step ------------------------------
+    def has_check(self) -> bool:
+        return self.p.blowup_guard.enabled
+
+    def check(self, t, u, restart):
+        c = u.cache
+        args = c.guard_args
+        args[0], args[1] = t, 1.0 if restart else 0.0
+        link = c.guard()
+        if link >= 0:
+            self.stop(blow_up_reason(self.robot, link, args, c.guard_out, t, self._mass), kind="blow_up")
+
     def stiffness_hint(self, u, readers):
         """The joint stops' modes (joint_stops.py), none when off."""
         return self._stops.hint() if self._stops is not None else []
@@ -388,7 +413,7 @@ class _Cache:
 
     __slots__ = ("x", "q", "v", "a", "qdd", "g", "vv", "fresh", "model", "want_acc", "kin", "ports", "state", "force",
                  "solve", "accelerations", "momentum", "energy", "ensure_kinematics", "lin_scratch", "frames", "lin_tau",
-                 "lin_op", "T", "solved")
+                 "lin_op", "T", "solved", "guard", "guard_args", "guard_out", "guard_prev")
 
     def __init__(self, mb: Multibody, x, u, y):
         from . import kernels as k
@@ -422,6 +447,11 @@ class _Cache:
         self.accelerations, self.momentum = bind(k.acceleration_step, *args), bind(k.momentum_step, *args)
         self.energy = bind(k.energy_step, *args)
         self.ensure_kinematics = bind(k._ensure_kinematics, mb._tree, self.kin)
+        self.guard = self.guard_args = self.guard_out = self.guard_prev = None
+        if mb.p.blowup_guard.enabled:           # blowup_guard.py: its record and kernel, bound once
+            from .blowup_guard import guard_step, make_guard
+            rec, self.guard_args, self.guard_out, self.guard_prev = make_guard(mb, mb.p.blowup_guard)
+            self.guard = bind(guard_step, mb._tree, self.kin, self.ports, rec)
         self.lin_scratch = np.zeros((nl, 6, 6))          # composite blocks (linearization.tree_quadratic)
         self.lin_tau = None                                # (torque input's Coo, its slopes: linearization.py)
         self.lin_op = None                                 # the link-tree operator (linearization.ArticulatedW)

@@ -12,6 +12,7 @@ from __future__ import annotations
 import csv
 import json
 import math
+import re
 
 import numpy as np
 import pytest
@@ -23,12 +24,20 @@ from snakesim.framework.cli import cli
 PAGE = "tutorial.md"
 
 
-def _invoke(args, where):
+def _invoke(args, where, expect: int = 0):
     result = CliRunner().invoke(cli, args, catch_exceptions=False)
-    if result.exit_code != 0:
-        pytest.fail(f"docs/{PAGE}:{where}: `snakesim {' '.join(args)}` exited {result.exit_code}:\n"
-                    f"{result.output}", pytrace=False)
+    if result.exit_code != expect:
+        pytest.fail(f"docs/{PAGE}:{where}: `snakesim {' '.join(args)}` exited {result.exit_code} (the page says "
+                    f"{expect}):\n{result.output}", pytrace=False)
     return result.output
+
+
+def _quoted_exit(page, i) -> int:
+    """The exit status the page quotes for the commands of console block ``i`` (``... exit status N`` in the
+    text block right after it; a failure the page demonstrates), else 0."""
+    nxt = page[i + 1] if i + 1 < len(page) else None
+    m = re.search(r"exit status (\d+)", nxt.text) if nxt is not None and nxt.lang == "text" else None
+    return int(m.group(1)) if m else 0
 
 
 def _columns(path) -> dict[str, np.ndarray]:
@@ -58,7 +67,7 @@ def tutorial(tmp_path_factory):
     try:
         page = blocks(PAGE)
         assert any(b.title for b in page) and any(b.commands() for b in page), "no runnable blocks found"
-        for b in page:
+        for i, b in enumerate(page):
             if b.lang == "yaml" and b.title:
                 path = work / b.title
                 path.parent.mkdir(parents=True, exist_ok=True)
@@ -69,7 +78,7 @@ def tutorial(tmp_path_factory):
             elif b.lang == "console":
                 for cmd in b.commands():
                     assert cmd[0] == "snakesim", f"docs/{PAGE}:{b.line}: only snakesim commands run here: {cmd}"
-                    _invoke(cmd[1:], b.line)
+                    _invoke(cmd[1:], b.line, _quoted_exit(page, i))
     finally:
         os.chdir(old)
     return work, first, page
@@ -102,7 +111,7 @@ def test_quoted_outputs_are_real(tutorial, monkeypatch):
 
     # step 4's stop
     summary = json.loads((work / "runs" / "over" / "summary.json").read_text())
-    assert not summary["completed"]
+    assert not summary["completed"] and summary["outcome"] == "failure" and summary["failure_kind"] == "stop_rule"
     quoted = next(t for t in texts if t.startswith("stop condition:"))
     assert summary["stop_reason"] in quoted
 

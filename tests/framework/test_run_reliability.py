@@ -22,6 +22,7 @@ from click.testing import CliRunner
 from snakesim.framework import Component, ContinuousState, Input, Output, Params
 from snakesim.framework.cli import cli
 from snakesim.framework.errors import ConfigError, SnakesimError
+from snakesim.framework.outcomes import exit_code_of
 
 SNAKESIM = Path(sys.executable).with_name("snakesim")
 
@@ -277,7 +278,7 @@ def test_a_stale_last_good_state_never_sits_beside_a_good_summary(tmp_path):
     out = tmp_path / "run"
     blow = ["run", "mass-spring-chain", "--set", "n=2", "--set", "k=1e6", "--dt", "0.01", "--duration", "1",
             "--integrator", "rk4", "--quiet", "--out", out]
-    assert _cli(*blow).exit_code == 3 and (out / "last_good_state.npz").is_file()
+    assert _cli(*blow).exit_code == exit_code_of("non_finite") and (out / "last_good_state.npz").is_file()
     r = _cli("run", "mass-spring-chain", "--set", "n=2", "--duration", "0.1", "--quiet", "--out", out, "--overwrite")
     assert r.exit_code == 0
     assert not (out / "last_good_state.npz").exists()
@@ -288,7 +289,7 @@ def test_a_stale_last_good_state_never_sits_beside_a_good_summary(tmp_path):
 def test_a_blow_up_without_out_says_nothing_was_saved_and_how_to_keep_it():
     r = _cli("run", "mass-spring-chain", "--set", "n=2", "--set", "k=1e6", "--dt", "0.01", "--duration", "1",
              "--integrator", "rk4", "--quiet")
-    assert r.exit_code == 3
+    assert r.exit_code == exit_code_of("non_finite")
     assert "nothing was saved (no --out); run again with --out DIR to keep the signals so far and the last good " \
            "state" in r.stderr
 
@@ -324,6 +325,7 @@ def test_an_interrupted_run_keeps_its_signals_summary_and_config(tmp_path, sig):
     assert "Traceback" not in err
     sm = json.loads((out / "summary.json").read_text())
     assert sm["completed"] is False and sm["interrupted"]["signal"] == sig.name
+    assert sm["outcome"] == "failure" and sm["failure_kind"] == "interrupted"
     assert sm["stop_reason"].startswith(f"signal: interrupted by {sig.name} at t = ")
     t_end = sm["interrupted"]["at_sim_time_s"]
     assert 0 < t_end < 10000 and t_end == sm["t_end_s"] and sm["interrupted"]["wall_clock"]

@@ -8,7 +8,9 @@ the heavy side's recoil changes it by ~1e-6), and ω = √(K/I). Classical RK4 o
 stable iff h·ω ≤ 2√2 (|R(iy)|² = 1 − y⁶/72 + y⁸/576).
 
 - Without armature, a step at h·ω = 2·2√2 grows the mode by |R| ≈ 37 per step: the run must
-  end as a reported non-finite state naming the multibody, with its last good state kept.
+  end as a reported failure naming the multibody, with its last good state kept: a blow-up
+  (the multibody's guard: the kinetic energy grows ~|R|² per step with nothing to supply it)
+  within a few steps, or, with the guard off, a non-finite state.
 - Without armature at h·ω = 2 (inside the bound) the same run completes, bounded: the bound is
   where the derivation puts it, not an accident of the scene.
 - With the default armature (>= armature_floor = 1e-3 kg·m² on bend_00: the rotor spins with
@@ -73,8 +75,9 @@ def light_tail(tmp_path_factory):
     return path, i_axis
 
 
-def run(tmp_path, urdf, dt, armature):
-    robot = {"urdf": str(urdf), "gravity": [0.0, 0.0, 0.0], "q0": {"bend_00": Q0}, **({} if armature else NO_ARMATURE)}
+def run(tmp_path, urdf, dt, armature, guard=True):
+    robot = {"urdf": str(urdf), "gravity": [0.0, 0.0, 0.0], "q0": {"bend_00": Q0}, **({} if armature else NO_ARMATURE),
+             "blowup_guard": {"enabled": guard}}
     assembly = {
         "sim": {"duration": STEPS * dt, "dt": dt, "integrator": "rk4"},
         "components": {
@@ -84,7 +87,7 @@ def run(tmp_path, urdf, dt, armature):
         "connections": ["robot.joint_q -> spring.q", "robot.joint_v -> spring.v", "spring.tau -> robot.tau"],
         "record": ["robot.energy", "robot.joint_q"],
     }
-    path = tmp_path / f"light-{dt:.6g}-{armature}.yaml"
+    path = tmp_path / f"light-{dt:.6g}-{armature}-{guard}.yaml"
     path.write_text(json.dumps(assembly), encoding="utf-8")       # JSON is YAML
     reg = default_registry()
     session = Session(resolve(str(path), search_path=reg.assembly_paths()), reg)
@@ -98,15 +101,25 @@ def test_light_tail_is_its_own_mode(light_tail):
 
 
 @pytest.mark.filterwarnings("ignore:overflow encountered:RuntimeWarning")   # the framework's own finiteness test
-def test_without_armature_a_step_past_the_rk4_bound_is_reported_as_non_finite(light_tail, tmp_path):
+@pytest.mark.parametrize("guard", [True, False], ids=["blow-up-guard", "guard-off"])
+def test_without_armature_a_step_past_the_rk4_bound_is_reported_as_a_failure(light_tail, tmp_path, guard):
     urdf, i_axis = light_tail
     omega = math.sqrt(K / i_axis)
-    session, r = run(tmp_path, urdf, 2.0 * RK4_BOUND / omega, armature=False)
+    session, r = run(tmp_path, urdf, 2.0 * RK4_BOUND / omega, armature=False, guard=guard)
     assert session.plan.components["robot"].armature_user["bend_00"] == 0.0
     sm = r.summary
-    assert not sm["completed"]
-    # the first non-finite value is the multibody's state or an output derived from it (its energy, recorded)
-    assert re.search(r"non-finite (state in|recorded output of) component 'robot'", sm["stop_reason"]), sm["stop_reason"]
+    assert not sm["completed"] and sm["outcome"] == "failure"
+    if guard:
+        # |R|² ≈ 1400 per step: the kinetic energy passes what the spring's end powers could supply at once
+        assert sm["failure_kind"] == "blow_up"
+        assert re.search(r"^robot: blow-up in the step from t = .* link '(tail|module_00)'", sm["stop_reason"]), \
+            sm["stop_reason"]
+        assert sm["steps"] < 20
+    else:
+        # the first non-finite value is the multibody's state or an output derived from it (its energy, recorded)
+        assert sm["failure_kind"] == "non_finite"
+        assert re.search(r"non-finite (state in|recorded output of) component 'robot'", sm["stop_reason"]), \
+            sm["stop_reason"]
     assert r.last_good_state is not None and np.isfinite(r.last_good_state["components"]["robot"]).all()
     assert sm["steps"] < STEPS
 
