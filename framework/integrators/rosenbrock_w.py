@@ -160,23 +160,21 @@ def _transformed(gamma: float, alpha: np.ndarray, gam: np.ndarray, b: np.ndarray
 
 
 _G = 4.3586652150845900e-01
+_GAMMA_34 = np.array([[0, 0, 0, 0],                    # ROS34PW2's γ_ij (k form, off the diagonal)
+                      [-8.7173304301691801e-01, 0, 0, 0],
+                      [-9.0338057013044082e-01, 5.4180672388095326e-02, 0, 0],
+                      [2.4212380706095346e-01, -1.2232505839045147e+00, 5.4526025533510214e-01, 0]])
 ROS34PW2 = _transformed(
     _G,
     np.array([[0, 0, 0, 0],
               [8.7173304301691801e-01, 0, 0, 0],
               [8.4457060015369423e-01, -1.1299064236484185e-01, 0, 0],
               [0, 0, 1.0, 0]]),
-    np.array([[0, 0, 0, 0],
-              [-8.7173304301691801e-01, 0, 0, 0],
-              [-9.0338057013044082e-01, 5.4180672388095326e-02, 0, 0],
-              [2.4212380706095346e-01, -1.2232505839045147e+00, 5.4526025533510214e-01, 0]]),
+    _GAMMA_34,
     np.array([2.4212380706095346e-01, -1.2232505839045147e+00, 1.5452602553351020e+00, _G]))
 # ROS34PW2's embedded order-2 weights b̂ (Rang & Angermann 2005), as m̂ = b̂ Γ⁻¹ in the U form
-_M_HAT = np.array([3.7810903145819369e-01, -9.6042292212423178e-02, 0.5, 2.1793326075422950e-01]) @ np.linalg.inv(
-    np.array([[0, 0, 0, 0],
-              [-8.7173304301691801e-01, 0, 0, 0],
-              [-9.0338057013044082e-01, 5.4180672388095326e-02, 0, 0],
-              [2.4212380706095346e-01, -1.2232505839045147e+00, 5.4526025533510214e-01, 0]]) + _G * np.eye(4))
+_M_HAT = np.array([3.7810903145819369e-01, -9.6042292212423178e-02, 0.5, 2.1793326075422950e-01]) @ \
+    np.linalg.inv(_GAMMA_34 + _G * np.eye(4))
 _ALPHA = np.array([0.0, 8.7173304301691801e-01, 8.4457060015369423e-01 - 1.1299064236484185e-01, 1.0])  # stage times
 GAMMA_ROS2 = 1.0 + 1.0 / np.sqrt(2.0)
 
@@ -197,7 +195,7 @@ class RosenbrockWParams(FixedStepParams):
                                                        "set-point jump taken at a finer step")
     step_control: Literal["fixed", "error"] = Field(
         "error", description="fixed: substeps (and refresh_substeps) equal steps per base step; error: steps "
-                             "chosen by ros2's embedded error estimate against atol_q, atol_v and rtol, never "
+                             "chosen by the method's embedded error estimate against atol_q, atol_v and rtol, never "
                              "longer than the base step (which stays the control period)")
     atol_q: float = Field(3e-4, gt=0, description="m or rad: absolute tolerance on each position coordinate's "
                                                   "change over a step (step_control: error)")
