@@ -1,7 +1,7 @@
 """Speed versus accuracy of the default scene (crescent screw traverse) and the parallel-walls scene.
 
     .venv/bin/python bench/tradeoff.py [--quick] [--json FILE] [--plot PNG] [--match TEXT] [--no-held]
-                                       [--repeats N]
+                                       [--repeats N] [--anchor implicitfast:0.01] [--events [FILE]]
 
 For each setting — every integrator at several steps / tolerances, both contact back ends
 (screw_sdf_contact / hull_contact: the `type` of component `contact` swapped in the resolved
@@ -12,7 +12,9 @@ constraint solved through the CRBA, the unoptimised path) — it runs the scene 
 
   wall s, RTF     wall time of the run (the fastest of --repeats identical runs) and simulated / wall time
   x MuJoCo        RTF / MuJoCo's RTF, per interleaved pair (each snakesim run followed by a MuJoCo run,
-                  bench/interleaved.py): median [min] by the wall clock and by CPU time
+                  bench/interleaved.py): median [min] by the wall clock and by CPU time. The anchor
+                  (--anchor INTEGRATOR:DT) is MuJoCo's 10-module screw snake at implicitfast, 10 ms: its
+                  large stable step, issue 24's speed anchor (euler:0.001, the former anchor, for comparison)
   pos err m       max over time of |tail (x, y) − reference| (traverse) or |CoM − reference| (walls)
   yaw err rad     max over time of |tail yaw − reference| (traverse; the fig. 14 quantities)
   stable          no non-finite-state or integrator-failure stop (the framework's stop;
@@ -20,11 +22,18 @@ constraint solved through the CRBA, the unoptimised path) — it runs the scene 
                   monitor) is compared up to the earlier of its end and the reference's.
 
 The reference is the same scene at rk4, dt = 0.25 ms (tests/validation/validation_scenes.py),
-computed in the same run. MuJoCo's 10-module screw snake (../shared/peers/mujoco_snake.py, Euler at
-1 ms) is timed in the same process after each of a setting's runs. Then the held-robot
+computed in the same run. MuJoCo's 10-module screw snake (../shared/peers/mujoco_snake.py, implicitfast at
+10 ms by default) is timed in the same process after each of a setting's runs. Then the held-robot
 cases (bench/held_cases.py: a held pair on a slope, the default scene's stop phase, the walls
 hold) with each setting's creep error against a converged reference (--no-held skips them). `--quick`: traverse 2 s (compressed schedule), walls 1.5 s and a
 reduced set of settings (a few minutes); full: 45 s traverse, 4 s walls, every setting.
+
+Events (--events [FILE], default bench/results/events.json): the event cases of bench/events.py (drops, a
+braced robot started off a wall, a stiff bounce, a free robot, the Mini EELS crawl, a /sim/set_pose drop) at
+each of its integrator settings, read from its JSON (run first, --quick as here, when the file is missing):
+a table per setting (cases completed, the worst error over the cases, CPU time and RTF by CPU time over all of
+them) and two more Pareto panels: each setting's RTF against its worst error (a setting that failed a case on
+the top edge), and every case's point. `--scene none --no-held --events` plots the events alone.
 """
 
 from __future__ import annotations
@@ -43,6 +52,8 @@ import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "validation"))
 from validation_scenes import REFERENCE, run, session, track_error  # noqa: E402
+
+from snakesim.framework.integrators.rosenbrock_w import RosenbrockWParams  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import held_cases  # noqa: E402
@@ -88,11 +99,18 @@ def _patch(contact_type=None, per_ring=None, screw_pairs=None):
 def settings(quick: bool):
     out = []
     def I(name, dt, **p):  # noqa: E743
-        if name == "rosenbrock_w":      # always explicit: the scene's own params merge under the override
+        shown = p
+        if name == "rosenbrock_w":
+            # every parameter explicit (the scene's own rosenbrock_w params would merge under a partial override);
+            # fixed steps unless the setting says error control (the integrator's default since issue 24)
+            p.setdefault("step_control", "fixed")
             p.setdefault("jacobian_every", 1)
+            p = {**RosenbrockWParams().model_dump(mode="json"), **shown}
         return {"label": f"{name} dt={dt:g}" + "".join(
-            f" {k}={v:g}" if isinstance(v, (int, float)) else f" {k}={v}" for k, v in p.items()),
+            f" {k}={v:g}" if isinstance(v, (int, float)) else f" {k}={v}" for k, v in shown.items()),
             "integrator": {"name": name, "params": p}, "dt": dt}
+    # the scene's own setting, as a user runs it (the default scene: rosenbrock_w under error control at 20 ms)
+    out.append({"label": "scene's own setting", "integrator": None, "dt": None})
     steps = {"rk4": [5e-4, 1e-3, 2e-3] if quick else [5e-4, 1e-3, 2e-3, 4e-3],
              "semi_implicit_euler": [2.5e-4, 5e-4, 1e-3] if quick else [1e-4, 2.5e-4, 5e-4, 1e-3, 2e-3],
              "rosenbrock2": [2e-3] if quick else [1e-3, 2e-3, 5e-3]}
@@ -116,6 +134,13 @@ def settings(quick: bool):
     for dt in (5e-3, 1.0 / 150.0, 1e-2):
         out.append(I("rosenbrock_w", dt, method="ros2", jacobian_every=8, jacobian_refresh="on_sources",
                      refresh_window=0.1, refresh_substeps=4))
+    # error control (issue 24): steps of the base step / 2^k chosen by ros2's embedded estimate; the integrator's
+    # default tolerances (3e-4 m, 3e-3 m/s, 3e-3), 3x tighter, and the default scene's (10x looser, 20 ms, J every 8
+    # steps and at the schedule's jumps)
+    out.append(I("rosenbrock_w", 1e-2, method="ros2", step_control="error"))
+    out.append(I("rosenbrock_w", 1e-2, method="ros2", step_control="error", atol_q=1e-4, atol_v=1e-3, rtol=1e-3))
+    out.append(I("rosenbrock_w", 2e-2, method="ros2", step_control="error", atol_q=3e-3, atol_v=3e-2, rtol=3e-2,
+                 jacobian_every=8, jacobian_refresh="on_sources", refresh_window=0.1))
     for dt in ([1e-2] if quick else [5e-3, 1e-2]):
         out.append(I("rosenbrock_w", dt, method="ros34pw2"))
     if not quick:
@@ -137,7 +162,19 @@ SCENES = {  # scene -> (--set items, quick horizon, full horizon)
 }
 
 
-def measure(scene, sets, horizon, s, repeats=1):
+ANCHOR = ("implicitfast", 0.01)     # MuJoCo's snake at its large stable step (issue 24's speed anchor)
+
+
+def parse_anchor(text: str) -> tuple[str, float]:
+    """'implicitfast:0.01' -> ('implicitfast', 0.01); the integrator name as MuJoCo spells it."""
+    names = {n.lower(): n for n in ("Euler", "RK4", "implicit", "implicitfast")}
+    name, _, dt = text.partition(":")
+    if name.lower() not in names or not dt:
+        raise click.BadParameter(f"'{text}': INTEGRATOR:DT with INTEGRATOR one of {', '.join(names.values())}")
+    return names[name.lower()], float(dt)
+
+
+def measure(scene, sets, horizon, s, repeats=1, anchor=ANCHOR):
     """One setting: its session built once and run ``repeats`` times (deterministic: the same result), each
     run followed by a run of MuJoCo's 10-module snake (bench/interleaved.py), both timed by the wall clock
     and by CPU time. Speed: the fastest run (RTF) and, per interleaved pair, the ratio to MuJoCo."""
@@ -153,7 +190,8 @@ def measure(scene, sets, horizon, s, repeats=1):
         last[:] = [r]
         return r.summary
 
-    cmp = compare(one, modules=10, mujoco_dt=1e-3, mujoco_duration=5.0, repeats=repeats)
+    cmp = compare(one, modules=10, mujoco_dt=anchor[1], mujoco_duration=5.0, repeats=repeats,
+                  mujoco_integrator=anchor[0])
     r = last[0]
     sm = r.summary
     best = min(cmp["repeats"], key=lambda x: x["snakesim_wall_s"])
@@ -177,11 +215,19 @@ def measure(scene, sets, horizon, s, repeats=1):
                                              "(e.g. --match rosenbrock_w); the held cases are not filtered.")
 @click.option("--repeats", default=3, show_default=True,
               help="Runs per setting, each followed by a MuJoCo run (interleaved pairs); the fastest RTF is kept.")
-def main(quick, json_path, plot_path, only, held, match, repeats):
+@click.option("--anchor", "anchor_text", default="implicitfast:0.01", show_default=True,
+              help="MuJoCo's snake as INTEGRATOR:DT (implicitfast:0.01, euler:0.001, ...).")
+@click.option("--events", "events_path", is_flag=False, flag_value=str(Path(__file__).resolve().parent / "results"
+                                                                       / "events.json"), default=None,
+              help="Add bench/events.py's event cases (its JSON; run first when missing) to the tables and the "
+                   "Pareto plot. Without FILE: bench/results/events.json.")
+def main(quick, json_path, plot_path, only, held, match, repeats, anchor_text, events_path):
+    anchor = parse_anchor(anchor_text)
     rows = []
     if available():
         print("Speed: each setting's session is run --repeats times, each run followed by MuJoCo's 10-module screw "
-              "snake\n(Euler, 1 ms, 5 s; ../shared/peers/mujoco_snake.py) in this process (bench/interleaved.py). "
+              f"snake\n({anchor[0]}, {anchor[1] * 1e3:g} ms, 5 s; ../shared/peers/mujoco_snake.py) in this process "
+              "(bench/interleaved.py). "
               "'x MuJoCo' = RTF / MuJoCo's RTF per pair:\nwall clock median [min], and by CPU time "
               "(process_time: what other processes take of the core does not count) median [min].")
     else:
@@ -203,12 +249,12 @@ def main(quick, json_path, plot_path, only, held, match, repeats):
         print(f"\n{scene}: {horizon:g} s; reference rk4 dt={REFERENCE['dt']:g}: {ref.summary['stop_reason']}, "
               f"RTF {ref.summary['real_time_factor']:.3g}", flush=True)
         chosen = [st for st in settings(quick) if not match or any(m in st["label"] for m in match)]
-        for name in dict.fromkeys(st["integrator"]["name"] for st in chosen):   # load each one's kernels
+        for name in dict.fromkeys(st["integrator"]["name"] for st in chosen if st["integrator"]):   # kernels
             run(scene, sets, {"duration": 0.05, "dt": 5e-3, "integrator": {"name": name, "params": {}}})
         print("| setting | wall s | RTF | x MuJoCo wall | x MuJoCo CPU | pos err m | yaw err rad | stable | stop |\n"
               "|---|---:|---:|---:|---:|---:|---:|---|---|")
         for s in chosen:
-            m = measure(scene, sets, horizon, s, repeats)
+            m = measure(scene, sets, horizon, s, repeats, anchor)
             row = {"scene": scene, "setting": s["label"], "horizon_s": horizon}
             if "error" in m:
                 row.update(error=m["error"], stable=False)
@@ -222,14 +268,54 @@ def main(quick, json_path, plot_path, only, held, match, repeats):
                       f"{'yes' if row['stable'] else 'NO'} | {row['stop'][:60]} |", flush=True)
             rows.append(row)
     held_rows = held_cases.main(quick) if held else []
+    event_rows = events_table(load_events(Path(events_path), quick)) if events_path else []
     if json_path:
         Path(json_path).parent.mkdir(parents=True, exist_ok=True)
         Path(json_path).write_text(json.dumps({"quick": quick, "reference": REFERENCE, "repeats": repeats,
-                                               "rows": rows, "held": held_rows}, indent=1) + "\n")
+                                               "anchor": {"integrator": anchor[0], "dt": anchor[1]},
+                                               "rows": rows, "held": held_rows, "events": event_rows},
+                                              indent=1, default=str) + "\n")
         print(f"\nwrote {json_path}")
     if plot_path:
-        plot(rows, Path(plot_path))
+        plot(rows, Path(plot_path), event_rows)
         print(f"\nwrote {plot_path}")
+
+
+def load_events(path: Path, quick: bool) -> dict:
+    """bench/events.py's results: read from ``path``, or run (at --quick as this run) and written there."""
+    if path.exists():
+        print(f"\nevent cases: {path} (bench/events.py)")
+        return json.loads(path.read_text())
+    import events
+    print(f"\nevent cases: {path} missing, running bench/events.py{' --quick' if quick else ''}", flush=True)
+    res = events.collect(quick)
+    events.write(res, str(path), str(path.with_suffix(".png")))
+    return res
+
+
+def events_table(res: dict) -> list[dict]:
+    """Per event setting, over every case it ran: cases completed, the worst error (m: bench/events.py's accuracy
+    figure: rest pose, bounce apex, tail), CPU s and simulated s in all, RTF by CPU time; and each case's point."""
+    out = []
+    for setting in res["settings"]:
+        rs = [r for r in res["rows"] if r.get("setting") == setting and "error" not in r]
+        if not rs:
+            continue
+        failed = [r["case"] for r in rs if not r["completed"]]
+        errs = [r["error_m"] for r in rs if r.get("error_m") is not None]
+        cpu, sim = sum(r["cpu_s"] for r in rs), sum(r["sim_s"] for r in rs)
+        out.append({"setting": setting, "cases": len(rs), "failed": failed,
+                    "worst_error_m": max(errs) if errs else None, "cpu_s": cpu, "sim_s": sim,
+                    "rtf_cpu": sim / max(cpu, 1e-9),
+                    "points": [{"case": r["case"], "rtf_cpu": r["rtf_cpu"], "error_m": r.get("error_m"),
+                                "completed": r["completed"]} for r in rs]})
+    print("\nevents (bench/events.py; error: rest pose, bounce apex or crawl tail against each case's converged "
+          "reference)\n| setting | cases | failed | worst error m | CPU s | RTF CPU |\n|---|---:|---|---:|---:|---:|")
+    for e in out:
+        we = "—" if e["worst_error_m"] is None else f"{e['worst_error_m']:.2e}"
+        print(f"| {e['setting']} | {e['cases']} | {', '.join(e['failed']) or '—'} | {we} | {e['cpu_s']:.2f} | "
+              f"{e['rtf_cpu']:.3g} |")
+    return out
 
 
 def pareto(points):
@@ -241,13 +327,18 @@ def pareto(points):
     return idx
 
 
-def plot(rows, path):
+def plot(rows, path, event_rows=()):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     scenes = sorted({r["scene"] for r in rows})
-    fig, axes = plt.subplots(1, len(scenes), figsize=(6.5 * len(scenes), 5), squeeze=False)
+    panels = len(scenes) + (2 if event_rows else 0)
+    if not panels:
+        return
+    fig, axes = plt.subplots(1, panels, figsize=(6.5 * panels, 5), squeeze=False)
+    if event_rows:
+        plot_events(axes[0][len(scenes)], axes[0][len(scenes) + 1], event_rows)
     for ax, scene in zip(axes[0], scenes):
         ok = [r for r in rows if r["scene"] == scene and r.get("stable") and "pos_err_m" in r]
         pts = [(r["rtf"], max(r["pos_err_m"], 1e-12)) for r in ok]
@@ -266,6 +357,51 @@ def plot(rows, path):
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=120)
+
+
+def plot_events(ax, ax_cases, event_rows):
+    """Left: each event setting's RTF (CPU, over all cases) against its worst error, the settings that failed a
+    case as crosses on the top edge, the Pareto front of the rest. Right: every case's point, by setting."""
+    import matplotlib
+    import matplotlib.pyplot as plt
+
+    ok = [e for e in event_rows if not e["failed"] and e["worst_error_m"] is not None]
+    top = max([e["worst_error_m"] for e in ok] + [1e-3]) * 3
+    colors = {e["setting"]: plt.cm.tab10(i % 10) for i, e in enumerate(event_rows)}
+    for e in event_rows:
+        failed = bool(e["failed"]) or e["worst_error_m"] is None
+        y = top if failed else max(e["worst_error_m"], 1e-7)
+        ax.scatter(e["rtf_cpu"], y, s=24, marker="x" if failed else "o", color=colors[e["setting"]])
+        ax.annotate(e["setting"] + (f" (failed {len(e['failed'])} of {e['cases']})" if e["failed"] else ""),
+                    (e["rtf_cpu"], y), fontsize=6, xytext=(3, 2), textcoords="offset points")
+    pts = [(e["rtf_cpu"], max(e["worst_error_m"], 1e-7)) for e in ok]
+    front = sorted((pts[i] for i in pareto(pts)), key=lambda p: p[0])
+    if front:
+        ax.plot(*zip(*front), "k--", lw=0.8, label="Pareto front")
+    ax.set_xscale("log"), ax.set_yscale("log")
+    ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+    ax.set_xlabel("real-time factor by CPU time, all event cases")
+    ax.set_ylabel("worst error over the cases vs reference, m (x: failed a case)")
+    ax.set_title("events (bench/events.py): each setting ('scene': each case's own)", fontsize=10)
+    ax.grid(True, which="both", lw=0.3)
+    ax.legend(fontsize=7)
+    cases = sorted({p["case"] for e in event_rows for p in e["points"]})
+    markers = dict(zip(cases, "os^vD<>pPh*"))
+    for e in event_rows:
+        for p in e["points"]:
+            y = top if not p["completed"] or p["error_m"] is None else max(p["error_m"], 1e-7)
+            ax_cases.scatter(p["rtf_cpu"], y, s=20, color=colors[e["setting"]], marker=markers[p["case"]],
+                             alpha=0.35 if not p["completed"] else 0.9)
+    handles = ([plt.Line2D([], [], color=colors[e["setting"]], marker="o", ls="", label=e["setting"])
+                for e in event_rows] +
+               [plt.Line2D([], [], color="0.3", marker=markers[c], ls="", label=c) for c in cases])
+    ax_cases.legend(handles=handles, fontsize=5.5, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
+    ax_cases.set_xscale("log"), ax_cases.set_yscale("log")
+    ax_cases.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+    ax_cases.set_xlabel("real-time factor by CPU time")
+    ax_cases.set_ylabel("error vs the case's reference, m (top edge: failed)")
+    ax_cases.set_title("events: every case")
+    ax_cases.grid(True, which="both", lw=0.3)
 
 
 if __name__ == "__main__":
