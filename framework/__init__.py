@@ -14,10 +14,11 @@ from .hookspecs import hookimpl
 
 _WHERE = {"Cell": "binding", "Component": "component", "ContinuousState": "component", "Params": "component",
           "BuildError": "errors", "ConfigError": "errors", "RegistryError": "errors", "SnakesimError": "errors",
-          "Harness": "harness", "Input": "ports", "Output": "ports", "Provides": "resources", "Uses": "resources"}
+          "Harness": "harness", "Input": "ports", "Output": "ports", "Provides": "resources", "Uses": "resources",
+          "Builder": "builder", "Simulation": "simulation", "load": "simulation"}
 
 __all__ = ["Cell", "Component", "ContinuousState", "Params", "Input", "Output", "Uses", "Provides", "Harness", "hookimpl",
-           "SnakesimError", "ConfigError", "BuildError", "RegistryError"]
+           "Builder", "Simulation", "load", "SnakesimError", "ConfigError", "BuildError", "RegistryError"]
 
 
 def __getattr__(name: str):

@@ -180,8 +180,17 @@ class Component(Generic[P]):
                 raise TypeError(f"{cls.__name__}.{name}: feedthrough names unknown inputs {bad}")
 
     def __init__(self, name: str = "component", params: P | dict | None = None, rate: float | None = None,
-                 uses: dict | None = None):
+                 uses: dict | None = None, **param_values):
+        """``params`` a ``Params`` instance or a dict, or the parameters as keywords
+        (``Pendulum("pend", length=2.0)``). ``uses``: the resources it needs; left out (None) while a
+        required one is missing, construction waits for a :class:`~.builder.Builder` to bind them
+        from the components that provide them, as an assembly does (``setup()`` runs then)."""
         self.name = name
+        if param_values:
+            if params is None or isinstance(params, dict):
+                params = {**(params or {}), **param_values}
+            else:
+                raise TypeError(f"{name}: give the parameters as a Params instance or as keywords, not both")
         if params is None:
             params = {}
         self.p: P = params if isinstance(params, self.Params) else self.Params(**params)
@@ -190,13 +199,38 @@ class Component(Generic[P]):
         self.rate = rate
         self._stop = StopFlag()
         self.used_outputs: frozenset[str] = frozenset(type(self).outputs)
-        self._bind_uses(uses or {})
+        if uses is None and any(u.required for u in type(self).uses.values()):
+            self.pending_uses = True          # a builder binds them (bind_resources), then setup() runs
+            return
+        self.bind_resources(uses or {})
+
+    #: True while a required resource waits to be bound by a builder (setup() not run yet)
+    pending_uses: bool = False
+
+    def bind_resources(self, uses: dict) -> None:
+        """Bind the resources (``{slot: object}``) and run ``setup()``: at construction, or later for a
+        component made without its resources (a :class:`~.builder.Builder` binds them at build)."""
+        self._bind_uses(uses)
         self.setup()
+        self.pending_uses = False
         for slot, prov in type(self).provides.items():
             obj = self.__dict__.get(slot)
             if not isinstance(obj, prov.kind):
-                raise TypeError(f"{name}: setup() must set self.{slot} to a {prov.kind.__name__} "
+                raise TypeError(f"{self.name}: setup() must set self.{slot} to a {prov.kind.__name__} "
                                 f"(it provides one), got {type(obj).__name__}")
+
+    @property
+    def out(self):
+        """Its output ports as attributes (``pend.out.theta``): what a builder connects, records and
+        stops on, and what a simulation reads."""
+        from .ports import PortNamespace
+        return PortNamespace(self, "output")
+
+    @property
+    def inp(self):
+        """Its input ports as attributes (``damper.inp.omega``): what a builder connects or opens."""
+        from .ports import PortNamespace
+        return PortNamespace(self, "input")
 
     def _bind_uses(self, given: dict) -> None:
         cls = type(self)

@@ -31,7 +31,7 @@ class Harness:
                  rate: float | None = None, name: str = "component", uses: dict | None = None):
         """``uses``: the resources the component needs, e.g. ``{"robot": RobotModel.load(design="eels-1.0")}``."""
         if isinstance(component, type):
-            component = component(name, params or {}, rate, uses=uses)
+            component = component(name, params or {}, rate, uses=uses or {})
         self.c = component
         self.infos = port_infos(component)
         self._in, self._in_cells, self._out, self._out_cells = {}, {}, {}, {}

@@ -92,6 +92,7 @@ class Plan:
     edits: tuple[tuple, ...] = ()                 # (component.edit_state, its inputs): state-edit requesters
     checks: tuple[tuple, ...] = ()                # (component.check, its inputs): once-per-base-step guards
     io: dict = field(default_factory=dict)        # component -> (state view, inputs, outputs): for Jacobians
+    open_inputs: dict = field(default_factory=dict)   # PortRef -> its own buffer: inputs set from outside
 
     # -- the continuous system the integrators see ------------------------------
     @property
@@ -191,11 +192,7 @@ def _instantiate(resolved: Resolved, registry) -> tuple[dict[str, Component], di
             classes[name] = registry.component(spec.type)
         except Exception as e:
             raise ConfigError(str(e), resolved.where.get(name), f"components.{name}.type") from None
-    try:
-        order, binding = provider_order(classes, {n: s.uses for n, s in resolved.components.items()})
-    except ResourceBindingError as e:
-        raise ConfigError(str(e), resolved.where.get(e.component),
-                          f"components.{e.component}.uses" if e.component else "components") from None
+    order, binding = _resource_order(classes, {n: s.uses for n, s in resolved.components.items()}, resolved.where)
     built: dict[str, Component] = {}
     for name in order:
         spec, cls, where = resolved.components[name], classes[name], resolved.where.get(name)
@@ -214,8 +211,42 @@ def _instantiate(resolved: Resolved, registry) -> tuple[dict[str, Component], di
             raise ConfigError(msg, where, f"components.{name}.params.{loc}") from None
         except (ValueError, TypeError) as e:
             raise ConfigError(str(e), where, f"components.{name}") from None
+    return {n: built[n] for n in resolved.components}, _bound(binding)
+
+
+def _bound(binding) -> dict:
     bound = {n: {slot: b[0] for slot, b in slots.items() if b is not None} for n, slots in binding.items()}
-    return {n: built[n] for n in resolved.components}, {n: b for n, b in bound.items() if b}
+    return {n: b for n, b in bound.items() if b}
+
+
+def _resource_order(classes: dict, explicit: dict, where: dict):
+    """:func:`~.resources.provider_order`, its errors as a ConfigError naming the component's entry."""
+    try:
+        return provider_order(classes, explicit)
+    except ResourceBindingError as e:
+        raise ConfigError(str(e), where.get(e.component),
+                          f"components.{e.component}.uses" if e.component else "components") from None
+
+
+def bind_objects(comps: dict[str, Component], explicit: dict, where: dict) -> dict:
+    """Components made as objects (a :class:`~.builder.Builder`): those made without the resources they
+    need are handed them now from their providers, bound as an assembly binds them (by kind, or the
+    provider ``explicit`` names), providers first; the bindings, as :func:`_instantiate` returns them."""
+    classes = {}
+    for n, c in comps.items():
+        cls = type(c)
+        if not c.pending_uses and cls.uses:      # given its resources at construction: it only offers
+            cls = type(cls.__name__, (), {"uses": {}, "provides": cls.provides, "type_name": cls.type_name})
+        classes[n] = cls
+    order, binding = _resource_order(classes, explicit, where)
+    for n in order:
+        c = comps[n]
+        if c.pending_uses:
+            try:
+                c.bind_resources(resolve_uses(binding[n], comps))
+            except (ValueError, TypeError) as e:
+                raise ConfigError(str(e), where.get(n), f"components.{n}") from None
+    return _bound(binding)
 
 
 def _cycle(nodes: list[Node], edges: dict[int, list[tuple[int, PortRef, PortRef]]]) -> str:
@@ -251,26 +282,37 @@ def _cycle(nodes: list[Node], edges: dict[int, list[tuple[int, PortRef, PortRef]
 
 # -- the build, stage by stage ----------------------------------------------------
 
-def _wire(connections, comps, infos) -> dict[PortRef, PortRef]:
-    """Parse and check every connection; return input -> upstream output."""
+def _wire(connections, comps, infos, open_inputs=()) -> tuple[dict[PortRef, PortRef], frozenset]:
+    """Parse and check every connection; return input -> upstream output, and the inputs declared open
+    (``open_inputs``: (text, where) pairs; set from outside the plan, e.g. by a Python controller)."""
     sources: dict[PortRef, PortRef] = {}
     where_of: dict[PortRef, str] = {}
+    opened = {}
+    for text, where in open_inputs:
+        ref = parse_ref(text, comps, "input", where)
+        if isinstance(infos[ref.comp][ref.port].signal, Structured):
+            raise BuildError(f"open input {ref} ({where}): only numeric inputs can be set from outside")
+        opened[ref] = where
     for s, t, where in connections:
         src = parse_ref(s, comps, "output", where)
         dst = parse_ref(t, comps, "input", where)
         if dst in sources:
             raise BuildError(f"input {dst} is wired twice: from {sources[dst]} ({where_of[dst]}) and from {src} "
                              f"({where}); an input takes one source (add a sum block to combine)")
+        if dst in opened:
+            raise BuildError(f"input {dst} is declared open ({opened[dst]}) and wired from {src} ({where}); "
+                             "an open input is set from outside: leave it unconnected")
         check_compatible(src, infos[src.comp][src.port], dst, infos[dst.comp][dst.port], where)
         sources[dst] = src
         where_of[dst] = where
     missing = [PortRef(n, i) for n, c in comps.items() for i, p in c.inputs.items()
-               if p.required and PortRef(n, i) not in sources]
+               if p.required and PortRef(n, i) not in sources and PortRef(n, i) not in opened]
     if missing:
         lines = [f"  {m} ({comps[m.comp].type_name}, {infos[m.comp][m.port].describe()})" for m in missing]
         raise BuildError("required inputs are not connected:\n" + "\n".join(lines)
-                         + "\nconnect each with 'source.output -> component.input'")
-    return sources
+                         + "\nconnect each with 'source.output -> component.input'"
+                         + " (or, from Python, declare it open: Builder.open)")
+    return sources, frozenset(opened)
 
 
 def _prune(comps, sources, roots: set[str]) -> list[str]:
@@ -295,7 +337,7 @@ def _bind(comps, infos, sources, stop_flag):
             info = infos[n][p]
             out_buffers[PortRef(n, p)] = (Cell(None) if isinstance(info.signal, Structured)
                                           else np.zeros(info.shape, dtype=info.signal.dtype))
-    u_of, y_of = {}, {}
+    u_of, y_of, own = {}, {}, {}
     for n, c in comps.items():
         numeric_in, cells_in = {}, {}
         for i, port in c.inputs.items():
@@ -308,6 +350,8 @@ def _bind(comps, infos, sources, stop_flag):
                 default = 0.0 if port.default is None else port.default
                 shape = info.shape if info.shape is not None else np.shape(default)
                 buf = np.array(np.broadcast_to(np.asarray(default, dtype=info.signal.dtype), shape))
+            if ref not in sources:
+                own[ref] = buf          # its own value: the default, or what an open input is set to
             if isinstance(buf, Cell):
                 cells_in[i] = buf
             else:
@@ -319,7 +363,7 @@ def _bind(comps, infos, sources, stop_flag):
         y_of[n] = make_namespace(n, "outputs", {p: b for p, b in mine.items() if not isinstance(b, Cell)},
                                  {p: b for p, b in mine.items() if isinstance(b, Cell)})
         c._stop = stop_flag
-    return out_buffers, u_of, y_of
+    return out_buffers, u_of, y_of, own
 
 
 def _check_state_kinds(comps, cstates, dstates) -> None:
@@ -497,19 +541,28 @@ def _major_lists(calls, n_phases, used) -> tuple[tuple[tuple, ...], ...]:
                  for phase in range(n_phases))
 
 
-def build(resolved: Resolved, registry) -> Plan:
-    """Everything a run needs, decided once: the returned plan is never changed afterwards."""
-    dt = resolved.sim.dt
+def build(resolved: Resolved, registry, open_inputs=()) -> Plan:
+    """Everything a run needs, decided once: the returned plan is never changed afterwards.
+    ``open_inputs``: (``component.input``, where) pairs left unconnected, set from outside."""
     comps, resources = _instantiate(resolved, registry)
+    return compile_plan(comps, resources, resolved.connections, resolved.record, resolved.stop,
+                        resolved.sim.dt, resolved.sim.record_rate, open_inputs)
+
+
+def compile_plan(comps: dict[str, Component], resources: dict, connections, record, stop, dt: float,
+                 record_rate: float | None, open_inputs=()) -> Plan:
+    """The plan of built components (an assembly's, :func:`build`; a builder's objects): connections
+    as (source, target, where), records as (port, where), stops as (StopSpec, where); the same checks
+    and errors whichever front end wrote them."""
     infos = {name: port_infos(c) for name, c in comps.items()}
-    sources = _wire(resolved.connections, comps, infos)
-    recorded = [parse_ref(r, comps, "output", w) for r, w in resolved.record]
-    for ref, (_, w) in zip(recorded, resolved.record):
+    sources, opened = _wire(connections, comps, infos, open_inputs)
+    recorded = [parse_ref(r, comps, "output", w) for r, w in record]
+    for ref, (_, w) in zip(recorded, record):
         if isinstance(infos[ref.comp][ref.port].signal, Structured):
             raise BuildError(f"record {ref} ({w}): only numeric ports can be recorded")
-    stop_refs = [(spec, parse_ref(spec.signal, comps, "output", w), w) for spec, w in resolved.stop]
+    stop_refs = [(spec, parse_ref(spec.signal, comps, "output", w), w) for spec, w in stop]
     stopped = [ref for _, ref, _ in stop_refs]
-    record_every = period_of(resolved.sim.record_rate, dt, "sim.record_rate")
+    record_every = period_of(record_rate, dt, "sim.record_rate")
 
     cstates = {n: c.continuous_state() for n, c in comps.items()}
     dstates = {n: c.discrete_state() for n, c in comps.items()}
@@ -522,7 +575,7 @@ def build(resolved: Resolved, registry) -> Plan:
     sources = {d: s for d, s in sources.items() if d.comp in comps}
 
     stop_flag = StopFlag()
-    out_buffers, u_of, y_of = _bind(comps, infos, sources, stop_flag)
+    out_buffers, u_of, y_of, own_inputs = _bind(comps, infos, sources, stop_flag)
     _check_state_kinds(comps, cstates, dstates)
     X, DX, slices, x_of, dx_of, n_euclid = _layout_continuous(comps, cstates)
     XD, dslices, xd_of = _layout_discrete(comps, dstates)
@@ -582,4 +635,5 @@ def build(resolved: Resolved, registry) -> Plan:
                 once=once, n_phases=n_phases, X=X, DX=DX, XD=XD, slices=tuple(slices), dslices=dslices,
                 n_euclid_x=n_euclid, stop_flag=stop_flag, dt=dt, record_refs=tuple(recorded),
                 record_every=record_every, stops=stops, used=used, caches=caches, report=report, holds=holds,
-                edits=edits, checks=checks, io={n: (x_of.get(n, xd_of.get(n)), u_of[n], y_of[n]) for n in comps})
+                edits=edits, checks=checks, io={n: (x_of.get(n, xd_of.get(n)), u_of[n], y_of[n]) for n in comps},
+                open_inputs={r: own_inputs[r] for r in opened if r in own_inputs})

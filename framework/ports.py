@@ -88,3 +88,64 @@ class Output(Port):
         if self.feedthrough is False:
             return ()
         return tuple(self.feedthrough)
+
+
+class PortHandle:
+    """One port of one component instance (``robot.out.joint_q``): what a
+    :class:`~.builder.Builder` connects, records, stops on or opens, and what a
+    :class:`~.simulation.Simulation` reads or sets. Checked at build with the assembly's errors."""
+
+    __slots__ = ("component", "port", "kind")
+
+    def __init__(self, component, port: str, kind: str):
+        self.component, self.port, self.kind = component, port, kind
+
+    @property
+    def ref(self) -> str:
+        """``component.port``, as an assembly writes it."""
+        return f"{self.component.name}.{self.port}"
+
+    def __repr__(self) -> str:
+        return f"<{self.kind} {self.ref}>"
+
+    def __str__(self) -> str:
+        return self.ref
+
+
+class PortNamespace:
+    """A component instance's inputs or outputs as attributes, tab-completable (``dir()`` lists them).
+    A name that is not a port is refused at once, with the ports it has."""
+
+    __slots__ = ("_comp", "_kind")
+
+    def __init__(self, comp, kind: str):
+        object.__setattr__(self, "_comp", comp)
+        object.__setattr__(self, "_kind", kind)
+
+    def _ports(self) -> dict:
+        c = self._comp
+        return c.outputs if self._kind == "output" else c.inputs
+
+    def __getattr__(self, name: str) -> PortHandle:
+        if name.startswith("__"):
+            raise AttributeError(name)
+        ports = self._ports()
+        if name not in ports and not getattr(self._comp, "pending_uses", False):
+            import difflib
+            close = difflib.get_close_matches(name, list(ports), n=3, cutoff=0.5)
+            hint = f"; did you mean {', '.join(close)}?" if close else ""
+            raise AttributeError(f"{self._comp.name} ({type(self._comp).__name__}) has no {self._kind} '{name}'"
+                                 f"{hint}; its {self._kind}s: {', '.join(ports) or 'none'}")
+        return PortHandle(self._comp, name, self._kind)
+
+    def __setattr__(self, name, value):
+        raise AttributeError("ports are connected with a Builder, and open inputs set on a Simulation")
+
+    def __dir__(self):
+        return sorted(self._ports())
+
+    def __iter__(self):
+        return (PortHandle(self._comp, n, self._kind) for n in self._ports())
+
+    def __repr__(self) -> str:
+        return f"<{self._kind}s of {self._comp.name}: {', '.join(self._ports()) or 'none'}>"

@@ -107,6 +107,21 @@ class Recorder:
             return self._next_chunk(t)
         return None
 
+    def rerecord(self, t: float) -> None:
+        """Take the last row again (its time ``t``): the ports were evaluated anew at that time (an open
+        input set before the run moved on). Non-finite values are left to the next row's check."""
+        if self._i:
+            row = self._chunk[self._i - 1]
+        elif self.chunks:
+            row = self.chunks[-1][-1]
+        else:
+            return
+        if row[0] != t:
+            return
+        for sl, v in zip(self.slices, self.views):
+            row[sl] = v
+        self._rows_n = -1
+
     def _next_chunk(self, t: float) -> str | None:
         """The current chunk is full: keep it (streamed when a stream is open) and start the next, unless one
         more would pass the memory limit (then the message, and no new chunk)."""

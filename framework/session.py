@@ -7,7 +7,8 @@ from pathlib import Path
 
 from .assembly import Resolved, resolve
 from .errors import ConfigError, SnakesimError
-from .plan import Plan, build
+from .builder import Builder
+from .plan import Plan
 from .registry import Registry, default_registry
 from .run_reports import add_reports
 from .run_files import prepare_out_dir
@@ -16,20 +17,27 @@ from .warm_up import warm_up
 from .yaml_source import dump_yaml
 
 
+def make_integrator(spec, registry: Registry):
+    """The integrator an :class:`~.assembly.IntegratorSpec` names, with its parameters."""
+    try:
+        cls = registry.integrator(spec.name)
+    except Exception as e:
+        raise ConfigError(str(e), None, "sim.integrator.name") from None
+    try:
+        return cls(spec.params)
+    except Exception as e:
+        raise ConfigError(f"bad parameters for integrator '{spec.name}': {e}", None, "sim.integrator.params") from None
+
+
 class Session:
-    def __init__(self, resolved: Resolved, registry: Registry | None = None):
+    def __init__(self, resolved: Resolved, registry: Registry | None = None, open_inputs=()):
+        """``open_inputs``: (``component.input``, where) pairs left unconnected, set from outside
+        (:func:`.simulation.load`)."""
         self.registry = registry or default_registry()
         self.resolved = resolved
-        self.plan: Plan = build(resolved, self.registry)
-        spec = resolved.sim.integrator
-        try:
-            cls = self.registry.integrator(spec.name)
-        except Exception as e:
-            raise ConfigError(str(e), None, "sim.integrator.name") from None
-        try:
-            self.integrator = cls(spec.params)
-        except Exception as e:
-            raise ConfigError(f"bad parameters for integrator '{spec.name}': {e}", None, "sim.integrator.params") from None
+        # the assembly as builder calls (one path for files and Python objects): the plan of framework/plan.py
+        self.plan: Plan = Builder.from_resolved(resolved, self.registry, open_inputs).plan()
+        self.integrator = make_integrator(resolved.sim.integrator, self.registry)
         self.simulator = Simulator(self.plan, self.integrator)
         warm_up(self.plan, self.integrator, resolved.sim.t0)      # compiled code loaded now, not in the run
         self.interrupted: dict | None = None

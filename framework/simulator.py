@@ -82,6 +82,81 @@ class RunResult:
         return self.log[key]
 
 
+@dataclass(frozen=True)
+class _Tally:
+    """Where a run stands: its last tick and the counters its summary reports."""
+    k: int
+    t: float
+    wall: float
+    cpu: float
+    held: float
+    n_edits: int
+    max_lag: float
+
+
+class Run:
+    """A run in progress (:meth:`Simulator.start`): advanced tick by tick on demand, its state, outputs
+    and log kept between calls, until it stops or :meth:`finish` ends it."""
+
+    def __init__(self, simulator: "Simulator", loop, log: Recorder, t0: float):
+        self.simulator, self.log, self.t0 = simulator, log, t0
+        self._loop = loop
+        self._tally: _Tally | None = None        # where it is paused (None before the first advance)
+        self.result: RunResult | None = None     # once it ended (a stop, or finish())
+        self.realtime = False
+        next(loop)                                # set up: initial state, once-only outputs
+
+    @classmethod
+    def ended_with(cls, simulator: "Simulator", result: RunResult) -> "Run":
+        """A run already over (made elsewhere, e.g. ``Session.run``), holding its result."""
+        run = cls.__new__(cls)
+        run.simulator, run.log, run.t0, run._loop = simulator, result.log, result.summary["t_end_s"], None
+        run._tally, run.result, run.realtime = None, result, False
+        return run
+
+    @property
+    def k(self) -> int:
+        """The last tick reached (-1 before the first advance)."""
+        if self.result is not None:
+            return self.result.summary["steps"]
+        return -1 if self._tally is None else self._tally.k
+
+    @property
+    def ended(self) -> bool:
+        return self.result is not None
+
+    def advance(self, k: int) -> bool:
+        """Run to tick ``k`` (its outputs computed and recorded); False when the run ended on the way
+        (a stop: :attr:`result` says why)."""
+        if self.result is not None:
+            return False
+        try:
+            self._tally = self._loop.send(k)
+        except StopIteration as stop:
+            self.result = stop.value
+            return False
+        return True
+
+    def finish(self) -> RunResult:
+        """End the run where it stands (``duration reached``), or the result it stopped with."""
+        if self.result is None:
+            try:
+                self._loop.send(None)
+            except StopIteration as stop:
+                self.result = stop.value
+        return self.result
+
+    def summary(self) -> dict:
+        """The summary so far: the final one once the run ended, else where it is paused
+        (``stop_reason`` None, ``outcome`` None: still running)."""
+        if self.result is not None:
+            return self.result.summary
+        tally = self._tally or _Tally(-1, self.t0, 0.0, 0.0, 0.0, 0, 0.0)
+        s = self.simulator._summary(tally, self.t0, None, None, self.realtime)
+        s.update(stop_reason=None, completed=False, outcome=None, running=True)
+        return s
+
+
 class Simulator:
     """Runs a compiled :class:`~snakesim.framework.plan.Plan`; it reads the plan and never changes it."""
 
@@ -102,18 +177,42 @@ class Simulator:
 
     def run(self, duration: float, t0: float = 0.0, progress=None, realtime: bool = False,
             out_dir: Path | None = None) -> RunResult:
-        plan, integ = self.plan, self.integrator
-        dt = plan.dt
-        n_steps = step_count(duration, dt)
-        if n_steps < 1 or abs(n_steps * dt - duration) > 1e-9 * max(1.0, duration):
-            raise SnakesimError(f"duration {duration:g} s is not a whole number of steps dt = {dt:g} s "
-                                f"(nearest: {max(1, n_steps) * dt:g} s)")
-        log = Recorder(plan.record_refs, plan, n_steps // plan.record_every + 1, duration)
+        """One run from the initial state to ``t0 + duration`` (or its stop): :meth:`start`, advanced to
+        its last tick, finished."""
+        n_steps = self.steps_in(duration)
+        log = Recorder(self.plan.record_refs, self.plan, n_steps // self.plan.record_every + 1, duration)
         if out_dir is not None:     # full chunks go to signals.csv as they fill: a killed run keeps them
             try:
                 log.stream_to(Path(out_dir) / "signals.csv")
             except OSError as e:
                 raise SnakesimError(f"could not write the run to {out_dir}: {e}") from None
+        run = self.start(log, t0, progress=progress, realtime=realtime)
+        run.advance(n_steps)
+        return run.finish()
+
+    def steps_in(self, duration: float) -> int:
+        """Base steps in ``duration``, which must be a whole number of them."""
+        dt = self.plan.dt
+        n_steps = step_count(duration, dt)
+        if n_steps < 1 or abs(n_steps * dt - duration) > 1e-9 * max(1.0, duration):
+            raise SnakesimError(f"duration {duration:g} s is not a whole number of steps dt = {dt:g} s "
+                                f"(nearest: {max(1, n_steps) * dt:g} s)")
+        return n_steps
+
+    def start(self, log: Recorder, t0: float = 0.0, progress=None, realtime: bool = False) -> "Run":
+        """A run from the initial state, advanced on demand (:meth:`Run.advance`): the one step loop
+        that :meth:`run` and a :class:`~.simulation.Simulation` share. Nothing is evaluated yet."""
+        run = Run(self, self._loop(log, t0, progress, realtime), log, t0)
+        run.realtime = realtime
+        return run
+
+    def _loop(self, log: Recorder, t0: float, progress, realtime: bool):
+        """The step loop, as a generator: sent the tick to reach, it runs ticks (outputs, record, guards
+        and stops at each; then updates, gates, edits and the integrator step to the next) until that
+        tick's outputs are computed and recorded, and yields there (a pause: the state, outputs and log
+        are those at that tick); sent None it ends the run. It returns the run's result."""
+        plan, integ = self.plan, self.integrator
+        dt = plan.dt
         X, XD = plan.X, plan.XD
         np.copyto(X, self.X0)
         np.copyto(XD, self.XD0)
@@ -135,6 +234,7 @@ class Simulator:
         flag.clear()
         if self.requested:
             flag.set(*self.requested, FAILURE, INTERRUPTED)
+        self.inputs_changed = False
         sink_checks, record = self.sink_checks, log.record
         stop_reason, bad = None, None
         kind = None               # the failure kind when the run ends in a failure (outcomes.py)
@@ -143,15 +243,19 @@ class Simulator:
         holds, edits = plan.holds, plan.edits
         editor = StateEdit(plan, self.X0, self.XD0) if edits else None
         n_edits = 0
-        wall0 = time.perf_counter()
-        cpu0 = time.process_time()      # this process's CPU time: what others take of a shared core does not count
+        perf, cpu_time = time.perf_counter, time.process_time
+        until = yield             # the first tick to reach
+        wall0 = perf()
+        cpu0 = cpu_time()       # this process's CPU time: what others take of a shared core does not count
         next_report = wall0 + 0.5
         held = 0.0                # wall s spent in holds (not lag for realtime pacing)
         warmup = 0.0              # wall s the first step took beyond dt (lazy opening; not lag either)
+        paused = paused_cpu = 0.0       # wall / CPU s between advances (the caller's, not the run's)
         max_lag, next_lag_warn = 0.0, wall0
         t_prev = t_good = t = t0
-        k = 0
-        for k in range(n_steps + 1):
+        k = -1
+        while True:
+            k += 1
             t = t0 + k * dt
             phase = k % n_phases
             try:
@@ -191,15 +295,30 @@ class Simulator:
             if flag.reason is not None and (kind is None or flag.outcome == FAILURE):
                 stop_reason = f"{flag.source}: {flag.reason} at t = {t:.6g} s"
                 kind = flag.kind
-            if stop_reason or k == n_steps:
+            if stop_reason:
                 break
+            if k >= until:        # paused at tick k: its outputs computed and recorded, nothing past it
+                p0, c0 = perf(), cpu_time()
+                until = yield _Tally(k, t, perf() - wall0 - paused, cpu_time() - cpu0 - paused_cpu, held,
+                                     n_edits, max_lag)
+                paused += perf() - p0
+                paused_cpu += cpu_time() - c0
+                if until is None:
+                    break
+                if self.inputs_changed:     # open inputs set while paused: tick k's outputs and derivatives
+                    try:                    # again, with them (and its recorded row)
+                        self.reevaluate(log, k, t)
+                    except (np.linalg.LinAlgError, FloatingPointError) as e:
+                        stop_reason, bad = f"evaluation failed at t = {t:.6g} s{_where(e)}: {_what(e)}", True
+                        kind = "numerical"
+                        break
             for fn, xd, u in updates[phase]:
                 fn(t, xd, u)
             if holds:
-                h0 = time.perf_counter()
+                h0 = perf()
                 for fn, u in holds:
                     fn(t, u)
-                held += time.perf_counter() - h0
+                held += perf() - h0
             if edits:
                 for fn, u in edits:
                     fn(t, u, editor)
@@ -238,13 +357,13 @@ class Simulator:
             copyto(X_good, X)
             t_prev, t_good = t_good, t + dt
             if progress is not None and (k & 255) == 0:
-                now = time.perf_counter()
+                now = perf()
                 if now >= next_report:
-                    progress(t, t0 + n_steps * dt)
+                    progress(t, t0 + until * dt)
                     next_report = now + 0.5
             if realtime:
-                now = time.perf_counter()
-                ahead = (t + dt - t0) - (now - wall0 - held - warmup)
+                now = perf()
+                ahead = (t + dt - t0) - (now - wall0 - held - warmup - paused)
                 if k == 0 and ahead < 0:
                     # the first step opens what components open lazily (DDS, first JIT calls): not lag
                     warmup, ahead = -ahead, 0.0
@@ -255,33 +374,10 @@ class Simulator:
                     if -ahead > LAG_WARN_S and now >= next_lag_warn:
                         logger.warning("realtime: %.3g s behind the wall clock at t = %.6g s "
                                        "(real-time factor %.3g so far)", -ahead, t + dt,
-                                    (t + dt - t0) / max(now - wall0 - held - warmup, 1e-9))
+                                    (t + dt - t0) / max(now - wall0 - held - warmup - paused, 1e-9))
                         next_lag_warn = now + LAG_WARN_EVERY_S
-        wall = time.perf_counter() - wall0
-        cpu = time.process_time() - cpu0
-        sim_time = (t - t0)
-        summary = {
-            "sim_time_s": sim_time,
-            "wall_time_s": wall,
-            "real_time_factor": sim_time / wall if wall > 0 else float("inf"),
-            "cpu_time_s": cpu,
-            "steps": k,
-            "dt_s": dt,
-            "t_end_s": t,
-            "stop_reason": stop_reason or "duration reached",
-            "completed": stop_reason is None,        # reached its duration: no stop of either outcome
-            "outcome": FAILURE if kind is not None else SUCCESS,
-            "failure_kind": kind,
-            "integrator": {"name": integ.name, **integ.stats} if has_cont else None,
-        }
-        if self.step_check:
-            summary["step_check"] = self.step_check
-        if holds:
-            summary["held_wall_time_s"] = held
-        if edits:
-            summary["state_edits"] = n_edits
-        if realtime:
-            summary["realtime_max_lag_s"] = max_lag
+        tally = _Tally(k, t, perf() - wall0 - paused, cpu_time() - cpu0 - paused_cpu, held, n_edits, max_lag)
+        summary = self._summary(tally, t0, stop_reason, kind, realtime)
         last_good = None
         if kind == "blow_up" and not bad and t_prev < t_good:     # the state before the step that blew up
             bad, X_good, XD_good, t_good = True, X_prev, XD_prev if has_disc else XD_good, t_prev
@@ -290,6 +386,49 @@ class Simulator:
                          "components": {s.comp.name: X_good[s.x].copy() for s in plan.slices}}
             summary["last_good_time_s"] = t_good
         return RunResult(log, summary, last_good)
+
+    def reevaluate(self, log: Recorder, k: int, t: float) -> None:
+        """Tick ``k``'s outputs and derivatives at ``t`` again (open inputs set while the run is paused
+        there), and its recorded row."""
+        self.inputs_changed = False
+        plan = self.plan
+        phase = k % plan.n_phases
+        for fn, x, u, y in plan.major[phase]:
+            fn(t, x, u, y)
+        if plan.nx:
+            for fn, x, u, y in plan.derivs:
+                fn(t, x, u, y)
+        if k % plan.record_every == 0:
+            log.rerecord(t)
+
+    def _summary(self, tally: "_Tally", t0: float, stop_reason: str | None, kind: str | None,
+                 realtime: bool) -> dict:
+        plan, integ = self.plan, self.integrator
+        sim_time = (tally.t - t0)
+        wall = tally.wall
+        summary = {
+            "sim_time_s": sim_time,
+            "wall_time_s": wall,
+            "real_time_factor": sim_time / wall if wall > 0 else float("inf"),
+            "cpu_time_s": tally.cpu,
+            "steps": tally.k,
+            "dt_s": plan.dt,
+            "t_end_s": tally.t,
+            "stop_reason": stop_reason or "duration reached",
+            "completed": stop_reason is None,        # reached its duration: no stop of either outcome
+            "outcome": FAILURE if kind is not None else SUCCESS,
+            "failure_kind": kind,
+            "integrator": {"name": integ.name, **integ.stats} if plan.nx > 0 else None,
+        }
+        if self.step_check:
+            summary["step_check"] = self.step_check
+        if plan.holds:
+            summary["held_wall_time_s"] = tally.held
+        if plan.edits:
+            summary["state_edits"] = tally.n_edits
+        if realtime:
+            summary["realtime_max_lag_s"] = tally.max_lag
+        return summary
 
     def _edit_step(self, editor: StateEdit, t: float, dt: float):
         """One base step whose result is the edited state: integrated first unless a reset replaces the
