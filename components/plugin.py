@@ -87,6 +87,15 @@ def snakesim_register_components(registry):
 
 
 @hookimpl
+def snakesim_register_terrain_kinds(registry):
+    # the kinds terrain YAML can name: plane, tube, parallel_walls, u_channel, moulin, dem, obstacles, mesh
+    from .terrain.spec import builtin_terrain_kinds
+
+    for kind in builtin_terrain_kinds():
+        registry.add_terrain_kind(kind)
+
+
+@hookimpl
 def snakesim_cli_shorthands():
     # scene parameters every robot scene declares: swapping the robot or the
     # terrain is then one flag on any scene

@@ -17,6 +17,14 @@ def snakesim_register_integrators(registry):
 
 
 @hookspec
+def snakesim_register_terrain_kinds(registry):
+    """Add terrain kinds with ``registry.add_terrain_kind(kind)``: a
+    ``snakesim.components.terrain.TerrainKind`` (the ``kind:`` value of terrain YAML, its pydantic spec
+    model, the factory that builds its Terrain). Every consumer (contact, viewer, sensors, placement) reads
+    the terrain through the Terrain class's own methods, so nothing else is registered."""
+
+
+@hookspec
 def snakesim_assembly_paths():
     """Return folders (paths or importlib Traversables) holding assembly YAML files."""
 

@@ -38,6 +38,8 @@ class Registry:
     def __init__(self, plugin_manager: pluggy.PluginManager | None = None):
         self.components: dict[str, type[Component]] = {}
         self.integrators: dict[str, type] = {}
+        #: terrain kind name (the ``kind:`` of terrain YAML) -> TerrainKind, in registration order
+        self.terrain_kinds: dict[str, object] = {}
         self.origins: dict[str, str] = {}
         self.pm = plugin_manager
         #: name -> the clashing registrations ("plugin: module.Class"), for names two plugins registered
@@ -82,6 +84,29 @@ class Registry:
             return
         self.integrators[name] = cls
         self.origins[f"integrator:{name}"] = self.current_plugin or "?"
+
+    def add_terrain_kind(self, kind) -> None:
+        """A ``TerrainKind`` (snakesim.components.terrain.kinds): its ``name`` is the ``kind:`` value."""
+        from snakesim.components.terrain.kinds import TerrainKind
+
+        if not isinstance(kind, TerrainKind):
+            raise RegistryError(f"{kind!r} is not a snakesim TerrainKind")
+        name = kind.name
+        if f"terrain kind:{name}" in self.clashes:
+            self.clashes[f"terrain kind:{name}"].append(f"{self.current_plugin}: {kind.terrain.__module__}."
+                                                       f"{kind.terrain.__qualname__}")
+            return
+        if name in self.terrain_kinds and self.terrain_kinds[name] is not kind:
+            old = self.terrain_kinds[name]
+            first = f"{self.origins.get(f'terrain kind:{name}', '?')}: {old.terrain.__module__}.{old.terrain.__qualname__}"
+            second = f"{self.current_plugin or '?'}: {kind.terrain.__module__}.{kind.terrain.__qualname__}"
+            if self.current_plugin is None:
+                raise RegistryError(f"terrain kind '{name}' registered twice: {first} and {second}")
+            self.clashes[f"terrain kind:{name}"] = [first, second]
+            del self.terrain_kinds[name]
+            return
+        self.terrain_kinds[name] = kind
+        self.origins[f"terrain kind:{name}"] = self.current_plugin or "?"
 
     def _clashed(self, kind: str, name: str) -> None:
         both = self.clashes.get(f"{kind}:{name}")
@@ -181,6 +206,12 @@ def _broken_plugin(name: str, what: str, error: BaseException) -> None:
     BROKEN_PLUGINS[name] = message
 
 
+@lru_cache(maxsize=1)
+def builtin_plugin_names() -> frozenset:
+    """The names the built-in plugins are registered under (their entry points' names)."""
+    return frozenset(ep.name for ep in entry_points(group=ENTRY_POINT_GROUP) if _is_builtin(ep))
+
+
 def _register_each(pm: pluggy.PluginManager, hook_name: str, reg: Registry) -> None:
     """Call one registration hook plugin by plugin (pluggy's order), so a third-party plugin that
     raises is reported by name and left out while the others register."""
@@ -202,6 +233,17 @@ def build_registry(load_entry_points: bool = True) -> Registry:
     reg = Registry(pm)
     _register_each(pm, "snakesim_register_components", reg)
     _register_each(pm, "snakesim_register_integrators", reg)
+    _register_each(pm, "snakesim_register_terrain_kinds", reg)
+    return reg
+
+
+@lru_cache(maxsize=1)
+def default_terrain_kinds() -> Registry:
+    """A registry holding only the terrain kinds (built-ins plus installed plugins): what terrain loading
+    reads, without importing every component. Clashing names raise where used (``terrain_kind``)."""
+    pm = make_plugin_manager()
+    reg = Registry(pm)
+    _register_each(pm, "snakesim_register_terrain_kinds", reg)
     return reg
 
 

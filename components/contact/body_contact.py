@@ -68,7 +68,6 @@ from snakesim.components.materials import MaterialPatch, material_table
 from snakesim.components.multibody.robot_model import RobotModel
 
 from ..kernel_args import bind
-from ..terrain.analytic import PlaneTerrain
 from ..terrain.base import Terrain
 from .body_kernels import (BodyPorts, BodyTable, BodyWork, body_centres_step, body_plane_step, body_sample_step,
                            body_seen_step, body_wrench_step)
@@ -120,7 +119,7 @@ class BodyContactParams(Params):
 class BodyContact(Component[BodyContactParams]):
     type_name = "body_contact"
     Params = BodyContactParams
-    #: query PlaneTerrain in numba (tests switch it off to compare with Terrain.query)
+    #: query a plane (Terrain.fast_plane) in numba (tests switch it off to compare with Terrain.query)
     fast_plane = True
 
     robot = Uses(RobotModel)
@@ -277,9 +276,10 @@ class _Cache:
         p = comp.p
         mats = material_table(terrain.materials, p.material, fn_max=p.fn_max, ev_floor=p.ev_floor, owner=comp.name)
         self.mats = mats
-        plane = type(terrain) is PlaneTerrain and comp.fast_plane
-        surface = Surface(origin=np.array(terrain.origin if plane else (0.0, 0.0, 0.0), dtype=float),
-                          n=np.array(terrain.n if plane else (0.0, 0.0, 1.0), dtype=float),
+        fast = terrain.fast_plane() if comp.fast_plane else None     # the kind says: one plane
+        plane = fast is not None
+        surface = Surface(origin=np.array(fast[0] if plane else (0.0, 0.0, 0.0), dtype=float),
+                          n=np.array(fast[1] if plane else (0.0, 0.0, 1.0), dtype=float),
                           region_material=int(terrain.region_material[0]) if plane else 0, mats=mats)
         t = comp._table
         if plane:

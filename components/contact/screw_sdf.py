@@ -90,7 +90,6 @@ from snakesim.components.multibody.linearization import LinkWrenchJacobian
 from snakesim.components.multibody.robot_model import RobotModel
 
 from ..kernel_args import bind
-from ..terrain.analytic import PlaneTerrain
 from ..terrain.base import Terrain
 from .contact_set import ContactSet
 from .kernels import EV_FLOOR, MODES
@@ -129,7 +128,7 @@ class ScrewSdfContactParams(Params):
 class ScrewSdfContact(Component[ScrewSdfContactParams]):
     type_name = "screw_sdf_contact"
     Params = ScrewSdfContactParams
-    #: query PlaneTerrain in numba (tests and the bench switch it off to compare)
+    #: query a plane (Terrain.fast_plane) in numba (tests and the bench switch it off to compare)
     fast_plane = True
 
     robot = Uses(RobotModel)
@@ -315,9 +314,10 @@ class _Cache:
                              "'terrain' output to it")
         self.jac = None                                            # its Jacobian call binds the new surface
         self.mats = mats = comp._material_table(terrain)
-        plane = type(terrain) is PlaneTerrain and comp.fast_plane
-        self.surface = Surface(origin=np.array(terrain.origin if plane else (0.0, 0.0, 0.0), dtype=float),
-                               n=np.array(terrain.n if plane else (0.0, 0.0, 1.0), dtype=float),
+        fast = terrain.fast_plane() if comp.fast_plane else None     # the kind says: one plane
+        plane = fast is not None
+        self.surface = Surface(origin=np.array(fast[0] if plane else (0.0, 0.0, 0.0), dtype=float),
+                               n=np.array(fast[1] if plane else (0.0, 0.0, 1.0), dtype=float),
                                region_material=int(terrain.region_material[0]) if plane else 0, mats=mats)
         s = comp._samples
         if plane:       # the whole evaluation in one numba call

@@ -43,8 +43,8 @@ MAX_NODES = 200_000
 
 
 class FourierRefiner:
-    """The compiled refinement of one Fourier-cylinder terrain (``for_terrain`` returns None for
-    other kinds: they keep the NumPy iteration)."""
+    """The compiled refinement of one Fourier-cylinder terrain: what ``FourierCylinder.refiner`` and
+    ``Moulin.refiner`` return (other kinds return None and keep the NumPy iteration)."""
 
     def __init__(self, shaft, surface: bool, top: float, region_material, span=(0.0, 0.0)):
         self.origin = np.asarray(shaft.origin, dtype=np.float64)
@@ -70,16 +70,16 @@ class FourierRefiner:
 
     @staticmethod
     def for_terrain(terrain, vertices=None, margin: float = 1.0) -> "FourierRefiner | None":
-        """The refiner of ``terrain`` (None: not a Fourier cylinder), its table spanning the axial
-        extent of ``vertices`` (world, the sensor mesh) plus ``margin`` m."""
-        from snakesim.components.terrain.analytic import FourierCylinder, Moulin
+        """The compiled refiner of ``terrain`` (its kind's ``Terrain.refiner``; None: the generic Newton
+        iteration), its table spanning the axial extent of ``vertices`` (world, the sensor mesh) plus
+        ``margin`` m."""
+        return terrain.refiner(vertices, margin)
 
-        if isinstance(terrain, Moulin):
-            shaft, surface, top = terrain.shaft, terrain.surface, terrain.top
-        elif isinstance(terrain, FourierCylinder):
-            shaft, surface, top = terrain, False, 0.0
-        else:
-            return None
+    @staticmethod
+    def for_shaft(shaft, surface: bool, top: float, region_material, vertices=None,
+                  margin: float = 1.0) -> "FourierRefiner | None":
+        """The refiner of a Fourier-cylinder wall ``shaft`` (a tube, or a moulin's shaft with its ice
+        ``surface`` at z = ``top``); None where an angular order is not an integer in [0, MAX_ORDER]."""
         m = np.asarray(shaft.modes, dtype=np.float64).reshape(-1, 4)[:, 1]
         if not np.all((m == np.round(m)) & (m >= 0) & (m <= MAX_ORDER)):
             return None
@@ -87,7 +87,7 @@ class FourierRefiner:
         if vertices is not None and len(vertices):
             s = (np.asarray(vertices, dtype=np.float64) - shaft.origin) @ shaft.R[:, 2]
             span = (float(s.min()) - margin, float(s.max()) + margin)
-        return FourierRefiner(shaft, surface, top, terrain.region_material, span)
+        return FourierRefiner(shaft, surface, top, region_material, span)
 
     def refine(self, o, d, rays, iterations: int, tolerance: float, grazing: float, limit: float, albedo_m, color_m,
                distance, normal, albedo, color, material, near: float = 0.0):

@@ -3,7 +3,8 @@
 Built from the same geometry the viewer logs under ``world/physical`` (paper 2.2.3:
 ornamental geometry never occludes a sensor):
 
-    TerrainSurfaces   the terrain's display mesh, uncut (no cut-away), world frame, built once;
+    TerrainSurfaces   the terrain's display mesh (its kind's ``display_mesh``), uncut (no
+                      cut-away), world frame, built once;
                       per face the albedo and colour of the terrain material at its centroid
     RobotSurfaces     every link's URDF visual mesh in its link frame, packed once per robot;
                       per face the albedo and colour of the link's URDF material colour
@@ -63,10 +64,9 @@ def terrain_surfaces(terrain: Terrain, center=(0.0, 0.0, 0.0), extent: float = 3
     """The terrain as a sensor sees it: its display mesh with nothing cut away, ``extent`` (m)
     around ``center`` for unbounded kinds, curved kinds tessellated at ``cell`` (m) and, with
     ``refine``, their hits refined onto the exact surface."""
-    from snakesim.components.viz.terrain_geometry import terrain_mesh
+    from snakesim.components.terrain.display import terrain_mesh
 
-    if is_flat(terrain) or _cell_is_only_checkerboard(terrain):
-        cell = extent / 4      # flat ground tessellates exactly: a few large quads
+    cell = terrain.sensor_cell(extent, cell)      # flat ground tessellates exactly: a few large quads
     mesh = terrain_mesh(terrain, center=center, extent=extent, cell=cell, cutaway=None)
     V = np.asarray(mesh.vertices, dtype=np.float64)
     F = np.asarray(mesh.faces, dtype=np.int32)
@@ -88,29 +88,12 @@ def optical_table(materials) -> tuple[np.ndarray, np.ndarray]:
             np.array([m.color for m in materials], dtype=np.float64).reshape(-1, 3))
 
 
-def is_flat(terrain: Terrain) -> bool:
-    """Whether the terrain is made of planes (its mesh is its surface, to float32 rounding)."""
-    from snakesim.components.terrain import ParallelWalls, PlaneTerrain
-
-    return isinstance(terrain, (PlaneTerrain, ParallelWalls))
-
-
-def _cell_is_only_checkerboard(terrain: Terrain) -> bool:
-    """Kinds whose display ``cell`` only sets the flat ground's checkerboard (an obstacle field
-    tessellates its rocks by their own chord tolerance)."""
-    from snakesim.components.terrain import ObstacleField
-
-    return isinstance(terrain, ObstacleField)
-
-
 def is_exact(terrain: Terrain) -> bool:
     """Whether the terrain's zero level set is its true surface and its display mesh only a
-    tessellation of it (analytic kinds: refine mesh hits onto the surface). A height field's
-    mesh is its own grid and a mesh terrain's mesh is the imported file (its distance grid
+    tessellation of it (the kind's ``refine_hits``: refine mesh hits onto the surface). A height
+    field's mesh is its own grid and a mesh terrain's mesh is the imported file (its distance grid
     is the approximation): casting against the mesh is exact for those."""
-    from snakesim.components.terrain import HeightField, SdfGrid
-
-    return not isinstance(terrain, (HeightField, SdfGrid))
+    return bool(terrain.refine_hits)
 
 
 def robot_surfaces(robot: RobotModel, albedo: float | None = None, geometry: str = "visual") -> RobotSurfaces:

@@ -57,6 +57,23 @@ class PlaneTerrain(Terrain):
         st, ct = np.sin(tilt), np.cos(tilt)
         self.n = np.array([-st * np.cos(azimuth), -st * np.sin(azimuth), ct])
 
+    def display_mesh(self, center, extent, cell, cutaway):
+        from .display import _plane
+
+        return _plane(self, center, extent, cell)
+
+    def sensor_cell(self, extent, cell):
+        return extent / 4          # flat: a few large quads are exact
+
+    def contact_parts(self, extent=10.0, segments=64, resolution=0.05):
+        from .contact_geometry import plane_parts
+
+        return plane_parts(self)
+
+    def fast_plane(self):
+        # a subclass that keeps the plane's query keeps the compiled plane kernels
+        return (self.origin, self.n) if type(self)._query is PlaneTerrain._query else None
+
     def _query(self, p):
         d = (p - self.origin) @ self.n
         return d, np.broadcast_to(self.n, p.shape).copy(), np.zeros(len(d), dtype=np.int64)
@@ -92,6 +109,19 @@ class ParallelWalls(Terrain):
         self.gap, self.origin = float(gap), np.asarray(origin, dtype=float)
         _, self.lat, _ = _channel_frame(yaw, tilt)
 
+    def display_mesh(self, center, extent, cell, cutaway):
+        from .display import _walls
+
+        return _walls(self, center, extent, cell, cutaway)
+
+    def sensor_cell(self, extent, cell):
+        return extent / 4          # flat: a few large quads are exact
+
+    def contact_parts(self, extent=10.0, segments=64, resolution=0.05):
+        from .contact_geometry import walls_parts
+
+        return walls_parts(self)
+
     def _query(self, p):
         s = (p - self.origin) @ self.lat
         side = np.where(s >= 0, 1.0, -1.0)
@@ -116,6 +146,16 @@ class UChannel(Terrain):
         super().__init__(**kw)
         self.width, self.origin = float(width), np.asarray(origin, dtype=float)
         _, self.lat, self.up = _channel_frame(yaw)
+
+    def display_mesh(self, center, extent, cell, cutaway):
+        from .display import _u_channel
+
+        return _u_channel(self, center, extent, cell)
+
+    def contact_parts(self, extent=10.0, segments=64, resolution=0.05):
+        from .contact_geometry import u_channel_parts
+
+        return u_channel_parts(self, extent, segments, resolution)
 
     def _query(self, p):
         q = p - self.origin
@@ -177,6 +217,21 @@ class FourierCylinder(Terrain):
         c, sn = np.cos(arg), np.sin(arg)
         rs = self.radius + self.slope * s + c @ A
         return rs, -(sn @ (A * m)), self.slope - (sn @ (A * k))
+
+    def display_mesh(self, center, extent, cell, cutaway):
+        from .display import _cylinder
+
+        return _cylinder(self, center, extent, cell, cutaway, s_range=None)
+
+    def contact_parts(self, extent=10.0, segments=64, resolution=0.05):
+        from .contact_geometry import cylinder_parts
+
+        return cylinder_parts(self, extent, segments, resolution)
+
+    def refiner(self, vertices=None, margin=1.0):
+        from snakesim.components.perception.refine_kernels import FourierRefiner
+
+        return FourierRefiner.for_shaft(self, False, 0.0, self.region_material, vertices, margin)
 
     def _query(self, p):
         loc = (p - self.origin) @ self.R
@@ -267,6 +322,19 @@ class Moulin(Terrain):
         self.shaft, self.surface = shaft, surface
         self.top = float(shaft.origin[2])
         self.lipschitz = shaft.lipschitz
+
+    def display_mesh(self, center, extent, cell, cutaway):
+        from .display import _moulin
+
+        return _moulin(self, center, extent, cell, cutaway)
+
+    def contact_parts(self, extent=10.0, segments=64, resolution=0.05):
+        raise NotImplementedError("a shaft through a plane has no convex part and needs a holed surface mesh")
+
+    def refiner(self, vertices=None, margin=1.0):
+        from snakesim.components.perception.refine_kernels import FourierRefiner
+
+        return FourierRefiner.for_shaft(self.shaft, self.surface, self.top, self.region_material, vertices, margin)
 
     def _query(self, p):
         d, n, _ = self.shaft._query(p)
@@ -386,6 +454,14 @@ class SlotMoulin(Terrain):
             return self._query(np.asarray(p, dtype=float).reshape(-1, 3))[0]
         finally:
             self.surface = surface
+
+    def display_mesh(self, center, extent, cell, cutaway):
+        from .display import _slot_moulin
+
+        return _slot_moulin(self, center, extent, cell, cutaway)
+
+    def contact_parts(self, extent=10.0, segments=64, resolution=0.05):
+        raise NotImplementedError("a shaft through a plane has no convex part and needs a holed surface mesh")
 
     def _query(self, p):
         # the docstring's formulas, compiled over points and modes (slot_kernels.slot_query)

@@ -9,6 +9,43 @@
 Analytic kinds are exact where the geometry allows (plane, walls, smooth tube,
 U-channel); rough surfaces and height fields use a first-order distance
 (documented per kind) whose gradient equals the returned normal on the surface.
+
+A kind is one Terrain subclass plus its registration (terrain/kinds.py: the ``kind:`` name,
+the spec model, the factory). Everything a consumer needs is a method here, with a default,
+so a new kind implements :meth:`Terrain._query` and only overrides what it does better:
+
+    display_mesh(center, extent, cell, cutaway)   the viewer's mesh; also the sensors' Embree
+        scene (cutaway None). Default: the zero level set as a surface net (display.level_set_mesh)
+    sensor_cell(extent, cell)                     the tessellation the sensors ask for (flat kinds:
+        a few large quads). Default: ``cell``
+    refine_hits                                   whether a ray's mesh hit on a face that is off the
+        surface is refined onto the zero level set (False where the mesh *is* the surface: a DEM's
+        grid, an imported mesh). Default True: Newton on :meth:`query` along the ray
+    refiner(vertices, margin)                     a compiled refinement (tube, moulin: numba), or None
+        for the generic Newton iteration. Default None
+    contact_parts(extent, segments, resolution)   the hull back end's geometry: HalfSpace and
+        Triangles records. Default: the triangles of display_mesh around the origin
+    fast_plane()                                  (origin, normal) where the SDF contact may query the
+        terrain as one plane in numba. Default None
+
+Static geometry and state
+-------------------------
+A Terrain object is built once per run (TerrainSource.setup) and is the same object every step.
+What a run can change lives in ``terrain.state`` (:class:`TerrainState`), never in the geometry
+built in ``__init__``:
+
+- the static geometry (parameters, tables, grids, compiled records) is fixed once the object is
+  built: consumers may pack it, mesh it and bind it;
+- ``state`` holds named arrays that a kind's own model (a deformable terrain, the next issues) changes
+  **in place** during a run (``state.x[...] = ...``, never ``state.x = new_array``), then calls
+  ``state.changed()``, which bumps ``state.version``; ``query`` reads the state arrays at every call;
+- consumers that pack or bind terrain data (the contact components' ``use_terrain``, the sensors'
+  scene, the hull back end's coal parts) rebind only when the terrain *object* changes (``is not``),
+  never because its state changed: a compiled kernel bound to a state array sees the new values
+  through the same buffer. A consumer that derives something from the state (a display mesh) may
+  compare ``state.version`` with the version it built from.
+
+The built-in kinds are static: their state is empty and its version stays 0.
 """
 
 from __future__ import annotations
@@ -31,6 +68,61 @@ class TerrainQuery:
 
     def __len__(self) -> int:
         return int(self.distance.shape[0])
+
+
+@dataclasses.dataclass(frozen=True)
+class TerrainMesh:
+    """vertices (n, 3) m, faces (m, 3), normals (n, 3), colors (n, 4) uint8; world frame."""
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    normals: np.ndarray
+    colors: np.ndarray
+
+
+@dataclasses.dataclass(frozen=True)
+class HalfSpace:
+    """The solid {x: normal·x ≤ offset} (normal unit, pointing out of the solid): an exact contact part."""
+
+    normal: np.ndarray
+    offset: float
+
+
+@dataclasses.dataclass(frozen=True)
+class Triangles:
+    """A triangulated surface part: vertices (n, 3) m world, faces (m, 3) int. Triangles have no
+    inside: consumers orient contact normals with the terrain's query."""
+
+    vertices: np.ndarray
+    faces: np.ndarray
+
+
+class TerrainState:
+    """A terrain's mutable state: named arrays changed in place during a run (module docstring).
+
+        state = TerrainState(heights=np.zeros((n, m)))
+        state.heights[i, j] -= dz      # in place: every bound buffer sees it
+        state.changed()                # version + 1: consumers that derive from the state notice
+
+    An empty state (the static kinds) has no arrays and version 0.
+    """
+
+    def __init__(self, **arrays):
+        self.version = 0
+        self.names: tuple[str, ...] = tuple(arrays)
+        for name, value in arrays.items():
+            setattr(self, name, np.asarray(value))
+
+    def changed(self) -> None:
+        """Say the arrays were changed (in place); bumps ``version``."""
+        self.version += 1
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        return {name: getattr(self, name) for name in self.names}
+
+    def __repr__(self) -> str:
+        shapes = ", ".join(f"{n}{tuple(getattr(self, n).shape)}" for n in self.names)
+        return f"TerrainState({shapes}; version {self.version})"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -81,8 +173,10 @@ class Terrain:
 
     kind: str = "terrain"
     regions: tuple[str, ...] = ("surface",)
+    #: refine a ray's hits on mesh faces off the surface onto the zero level set (module docstring)
+    refine_hits: bool = True
 
-    def __init__(self, materials=(Material(),), region_material=None, name: str = ""):
+    def __init__(self, materials=(Material(),), region_material=None, name: str = "", state=None):
         self.materials: tuple[Material, ...] = tuple(materials)
         if not self.materials:
             raise ValueError("a terrain needs at least one material")
@@ -93,6 +187,8 @@ class Terrain:
                              f"to indices < {len(self.materials)}, got {rm.tolist()}")
         self.region_material = rm
         self.name = name or self.kind
+        #: what a run may change, in place (module docstring); static kinds: empty
+        self.state: TerrainState = TerrainState() if state is None else state
 
     # -- the interface --------------------------------------------------------
     def query(self, points) -> TerrainQuery:
@@ -129,6 +225,38 @@ class Terrain:
     def _query(self, p: np.ndarray):
         """-> distance (n,), unit normal (n, 3), region index (n,) int."""
         raise NotImplementedError
+
+    # -- what consumers ask of a kind (defaults: from the query alone) ------------------
+    def display_mesh(self, center: np.ndarray, extent: float, cell: float, cutaway: np.ndarray | None) -> TerrainMesh:
+        """The surface as triangles, ``extent`` m around ``center`` where unbounded, at about ``cell`` m;
+        ``cutaway`` (unit, or None) the side an enclosing kind may leave open towards the viewer.
+        Default: the zero level set of :meth:`query` (display.level_set_mesh; no cut-away)."""
+        from .display import level_set_mesh
+
+        return level_set_mesh(self, center, extent, cell)
+
+    def sensor_cell(self, extent: float, cell: float) -> float:
+        """The ``cell`` the sensors' mesh is built at, asked for ``cell`` over ``extent`` (flat kinds
+        tessellate exactly with a few large quads)."""
+        return cell
+
+    def refiner(self, vertices=None, margin: float = 1.0):
+        """A compiled refinement of ray hits (perception/refine_kernels.py: ``refine``,
+        ``beyond_wall``, ``query``) for the sensor mesh ``vertices``, or None: the generic Newton
+        iteration on :meth:`query`."""
+        return None
+
+    def contact_parts(self, extent: float = 10.0, segments: int = 64, resolution: float = 0.05) -> list:
+        """The hull back end's geometry: :class:`HalfSpace` and :class:`Triangles` records. Default:
+        the display mesh's triangles, ``extent`` m around the origin at ``resolution`` m.
+        NotImplementedError: the kind has none (the hull back end says so)."""
+        m = self.display_mesh(np.zeros(3), extent, resolution, None)
+        return [Triangles(np.asarray(m.vertices, dtype=np.float64), np.asarray(m.faces, dtype=np.int64))]
+
+    def fast_plane(self):
+        """(origin, unit normal) when the whole terrain is that one plane and its query may be replaced
+        by the compiled plane kernels of the SDF contact; None otherwise."""
+        return None
 
     def __repr__(self) -> str:
         return f"<{type(self).__name__} {self.name!r}>"

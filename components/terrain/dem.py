@@ -73,6 +73,19 @@ class HeightField(Terrain):
         hy = np.where(iny, ((1 - tx) * (z10 - z00) + tx * (z11 - z01)) / self.res, 0.0)
         return h, hx, hy
 
+    #: the mesh is the grid itself: ray hits on it are exact
+    refine_hits = False
+
+    def display_mesh(self, center, extent, cell, cutaway):
+        from .display import _dem
+
+        return _dem(self)
+
+    def contact_parts(self, extent=10.0, segments=64, resolution=0.05):
+        from .contact_geometry import height_field_parts
+
+        return height_field_parts(self)
+
     def _query(self, p):
         h, hx, hy = self.height(p[:, 0], p[:, 1])
         s = np.sqrt(1.0 + hx * hx + hy * hy)

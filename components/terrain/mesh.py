@@ -106,6 +106,19 @@ class SdfGrid(Terrain):
         self.hi = self.lo + self.h * (np.array(self.values.shape) - 1)
         self.source = source
 
+    #: the mesh is the imported file (the grid is the approximation): ray hits on it are exact
+    refine_hits = False
+
+    def display_mesh(self, center, extent, cell, cutaway):
+        from .display import _sdf
+
+        return _sdf(self)
+
+    def contact_parts(self, extent=10.0, segments=64, resolution=0.05):
+        from .contact_geometry import mesh_file_parts
+
+        return mesh_file_parts(self)
+
     def _query(self, p):
         d = np.empty(len(p))
         n = np.empty((len(p), 3))

@@ -152,6 +152,17 @@ class ObstacleField(Terrain):
     #: consecutive points sharing one broad-phase candidate list (a screw's samples lie together)
     CHUNK = 32
 
+    def display_mesh(self, center, extent, cell, cutaway):
+        from .display import _obstacles
+
+        return _obstacles(self, center, extent, cell)
+
+    def sensor_cell(self, extent, cell):
+        return extent / 4          # the cell only sets the ground's checkerboard; rocks follow SPHERE_CHORD
+
+    def contact_parts(self, extent=10.0, segments=64, resolution=0.05):
+        raise NotImplementedError("blocks and rocks on a ground plane have no coal representation yet")
+
     def _query(self, p):
         n = len(p)
         d, normal, region = np.empty(n), np.empty((n, 3)), np.empty(n, dtype=np.int64)

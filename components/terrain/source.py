@@ -3,7 +3,9 @@
 params  name   terrain name in terrains/ or a path (YAML or OBJ/STL/PLY)
         spec   inline definition (a terrain YAML mapping); overrides name
         store  terrain-store folder for mesh SDF grids (default: see store.py)
-out     terrain  structured Terrain (no inputs, no state)
+out     terrain  structured Terrain (no inputs, no state): the same object every step; a deformable
+                 kind changes its ``terrain.state`` in place (terrain/base.py), so consumers bound to
+                 the object never rebind during a run
 """
 
 from __future__ import annotations

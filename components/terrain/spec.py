@@ -1,6 +1,7 @@
 """YAML terrain definitions: pydantic schema (``kind:`` discriminator) and :func:`load_terrain`.
 
-    kind: u_channel            # plane | dem | tube | parallel_walls | u_channel | moulin | obstacles | mesh
+    kind: u_channel            # plane | dem | tube | parallel_walls | u_channel | moulin | obstacles | mesh,
+                               # or a kind a plugin registers (terrain/kinds.py)
     width: 0.4
     materials:                 # first one is the default of every region
       - {name: ice, k: 2.0e5, c: 500, mu: 0.1}
@@ -271,14 +272,26 @@ class ObstaclesSpec(_Base):
     random: RandomObstaclesSpec | None = None
 
 
-_SPECS = (PlaneSpec, TubeSpec, WallsSpec, UChannelSpec, MoulinSpec, DemSpec, ObstaclesSpec, MeshSpec)
-TerrainSpec = Annotated[Union[_SPECS], Field(discriminator="kind")]
-_ADAPTER = TypeAdapter(TerrainSpec)
-_SPEC_OF_KIND = {c.model_fields["kind"].annotation.__args__[0]: c for c in _SPECS}
-_CLASSES = {"plane": analytic.PlaneTerrain, "tube": analytic.FourierCylinder,
-            "parallel_walls": analytic.ParallelWalls, "u_channel": analytic.UChannel,
-            "moulin": analytic.Moulin, "dem": dem.HeightField, "obstacles": obstacles.ObstacleField,
-            "mesh": mesh.SdfGrid}
+#: the base of every kind's spec model (description, materials, regions): third-party kinds subclass it
+KindSpec = _Base
+
+
+def _adapter(kinds: dict):
+    """The schema of a terrain file: the union of the registered kinds' spec models (``kind:`` picks one)."""
+    specs = tuple(k.spec for k in kinds.values())
+    adapter = _ADAPTERS.get(specs)
+    if adapter is None:
+        adapter = _ADAPTERS[specs] = TypeAdapter(Annotated[Union[specs], Field(discriminator="kind")])
+    return adapter
+
+
+_ADAPTERS: dict = {}
+
+
+def _kinds(registry=None) -> dict:
+    from .kinds import terrain_kinds
+
+    return terrain_kinds(registry)
 
 
 # -- validation ------------------------------------------------------------------
@@ -345,25 +358,35 @@ def _unknown_key(key, valid) -> str:
     return f"unknown key '{key}'" + (f"; did you mean '{close[0]}'?" if close else "") + f" valid keys: {', '.join(valid)}"
 
 
-def validate_spec(data, source: str = "<terrain>", base_dir: Path | None = None):
-    """dict -> spec model; errors name the file:line and the key. ``{include: FILE}`` entries of
+def validate_spec(data, source: str = "<terrain>", base_dir: Path | None = None, registry=None):
+    """dict -> spec model of its kind (the kinds ``registry`` holds: default, the built-ins and every
+    installed plugin's); errors name the file:line and the key. ``{include: FILE}`` entries of
     ``materials`` are read relative to ``base_dir`` (default: the current folder)."""
     if not isinstance(data, dict):
         raise ConfigError(f"a terrain definition is a mapping with a 'kind' key, got {type(data).__name__}", source)
+    kinds = _kinds(registry)
+    if isinstance(data.get("kind"), str) and data["kind"] not in kinds:
+        from .kinds import terrain_kind
+
+        try:
+            terrain_kind(data["kind"], registry)          # a name two plugins registered: say which
+        except Exception as e:                            # noqa: BLE001 -- RegistryError
+            raise ConfigError(str(e), _where(data, ["kind"]) or source, "kind") from None
+    spec_of_kind = {name: k.spec for name, k in kinds.items()}
     data_in = data
     data = _expand_materials(data, Path(".") if base_dir is None else Path(base_dir), source)
     try:
-        return _ADAPTER.validate_python(dict(data))
+        return _adapter(kinds).validate_python(dict(data))
     except ValidationError as e:
         errs = e.errors()
         err = next((x for x in errs if x["type"] == "extra_forbidden"), errs[0])   # a typo explains 'missing'
         loc = [x for x in err["loc"] if not (isinstance(x, str) and x == data.get("kind"))]
         msg = _message(err)
-        short = _short_tuple(err, loc, _SPEC_OF_KIND.get(data.get("kind")))
+        short = _short_tuple(err, loc, spec_of_kind.get(data.get("kind")))
         if short is not None:
             loc, msg = short
         if err["type"] == "extra_forbidden":
-            model = _model_at(_SPEC_OF_KIND.get(data.get("kind")), loc)
+            model = _model_at(spec_of_kind.get(data.get("kind")), loc)
             msg = f"unknown key '{loc[-1]}'"
             if model is not None:
                 msg = _unknown_key(loc[-1], model.model_fields)
@@ -417,40 +440,75 @@ def _materials(spec, cls, source):
     return {"materials": mats, "region_material": rm}
 
 
-def build_terrain(spec, base_dir: Path = Path("."), source: str = "<terrain>", name: str = "", store=None) -> Terrain:
-    """Spec model (or plain dict) -> Terrain."""
+def build_terrain(spec, base_dir: Path = Path("."), source: str = "<terrain>", name: str = "", store=None,
+                  registry=None) -> Terrain:
+    """Spec model (or plain dict) -> Terrain, by the factory of its registered kind."""
+    from .kinds import BuildContext
+
     if isinstance(spec, dict):
-        spec = validate_spec(spec, source, base_dir)
-    kw = _materials(spec, _CLASSES[spec.kind], source)
+        spec = validate_spec(spec, source, base_dir, registry)
+    kind = _kinds(registry).get(spec.kind)
+    if kind is None or not isinstance(spec, kind.spec):
+        raise ConfigError(f"terrain kind '{spec.kind}' is not registered (valid: "
+                          f"{', '.join(_kinds(registry))})", source, "kind")
+    kw = _materials(spec, kind.terrain, source)
     kw["name"] = name or spec.kind
     try:
-        if spec.kind == "plane":
-            return analytic.PlaneTerrain(spec.origin, spec.tilt, spec.azimuth, **kw)
-        if spec.kind == "tube":
-            modes = spec.roughness.modes() if spec.roughness else None
-            return analytic.FourierCylinder(spec.radius, spec.origin, spec.axis, modes=modes, **kw)
-        if spec.kind == "parallel_walls":
-            return analytic.ParallelWalls(spec.gap, spec.origin, spec.yaw, spec.tilt, **kw)
-        if spec.kind == "u_channel":
-            return analytic.UChannel(spec.width, spec.origin, spec.yaw, **kw)
-        if spec.kind == "moulin":
-            shaft = _moulin_shaft(spec)
-            if isinstance(shaft, tuple):                        # a slot: its own exact class
-                (a, b), axis, along = shaft
-                mz = spec.meander
-                meander = None if mz is None else analytic.fourier_modes(
-                    mz.seed, mz.n_modes, mz.rms, mz.wavelength_min, mz.wavelength_max, 0, 0, mz.hurst)
-                return analytic.SlotMoulin(a, b, spec.origin, axis, along, spec.slope, spec.roughness.modes(),
-                                           spec.surface, meander, **kw)
-            return analytic.Moulin(shaft, spec.surface, **kw)
+        return kind.build(spec, BuildContext(Path(base_dir), source, store), **kw)
     except ValueError as e:
         raise ConfigError(str(e), source) from None
-    if spec.kind == "obstacles":
-        return _build_obstacles(spec, source, kw)
-    if spec.kind == "dem":
-        return _build_dem(spec, base_dir, source, kw)
-    return mesh.mesh_terrain(base_dir / spec.file, spec.cells, spec.resolution, spec.padding, spec.inside,
-                             spec.open_surface, store=store, **kw)
+
+
+# -- the built-in kinds' factories (registered in builtin_terrain_kinds) ------------------
+
+def _build_plane(spec: PlaneSpec, ctx, **kw) -> Terrain:
+    return analytic.PlaneTerrain(spec.origin, spec.tilt, spec.azimuth, **kw)
+
+
+def _build_tube(spec: TubeSpec, ctx, **kw) -> Terrain:
+    modes = spec.roughness.modes() if spec.roughness else None
+    return analytic.FourierCylinder(spec.radius, spec.origin, spec.axis, modes=modes, **kw)
+
+
+def _build_walls(spec: WallsSpec, ctx, **kw) -> Terrain:
+    return analytic.ParallelWalls(spec.gap, spec.origin, spec.yaw, spec.tilt, **kw)
+
+
+def _build_u_channel(spec: UChannelSpec, ctx, **kw) -> Terrain:
+    return analytic.UChannel(spec.width, spec.origin, spec.yaw, **kw)
+
+
+def _build_moulin(spec: MoulinSpec, ctx, **kw) -> Terrain:
+    shaft = _moulin_shaft(spec)
+    if isinstance(shaft, tuple):                        # a slot: its own exact class
+        (a, b), axis, along = shaft
+        mz = spec.meander
+        meander = None if mz is None else analytic.fourier_modes(
+            mz.seed, mz.n_modes, mz.rms, mz.wavelength_min, mz.wavelength_max, 0, 0, mz.hurst)
+        return analytic.SlotMoulin(a, b, spec.origin, axis, along, spec.slope, spec.roughness.modes(),
+                                   spec.surface, meander, **kw)
+    return analytic.Moulin(shaft, spec.surface, **kw)
+
+
+def _build_mesh(spec: MeshSpec, ctx, **kw) -> Terrain:
+    return mesh.mesh_terrain(ctx.base_dir / spec.file, spec.cells, spec.resolution, spec.padding, spec.inside,
+                             spec.open_surface, store=ctx.store, **kw)
+
+
+def builtin_terrain_kinds() -> tuple:
+    """snakesim's own kinds, in the order the schema lists them (components/plugin.py registers them)."""
+    from .kinds import TerrainKind
+
+    return (TerrainKind("plane", PlaneSpec, analytic.PlaneTerrain, _build_plane),
+            TerrainKind("tube", TubeSpec, analytic.FourierCylinder, _build_tube),
+            TerrainKind("parallel_walls", WallsSpec, analytic.ParallelWalls, _build_walls),
+            TerrainKind("u_channel", UChannelSpec, analytic.UChannel, _build_u_channel),
+            TerrainKind("moulin", MoulinSpec, analytic.Moulin, _build_moulin),
+            TerrainKind("dem", DemSpec, dem.HeightField,
+                        lambda spec, ctx, **kw: _build_dem(spec, ctx.base_dir, ctx.source, kw)),
+            TerrainKind("obstacles", ObstaclesSpec, obstacles.ObstacleField,
+                        lambda spec, ctx, **kw: _build_obstacles(spec, ctx.source, kw)),
+            TerrainKind("mesh", MeshSpec, mesh.SdfGrid, _build_mesh))
 
 
 def _moulin_shaft(spec: MoulinSpec):
@@ -546,13 +604,14 @@ def terrain_materials(ref: str) -> tuple[Material, ...]:
     return tuple(validate_spec(load_yaml(path), str(path), path.parent).materials)
 
 
-def load_terrain(ref: str | dict, store=None) -> Terrain:
-    """Terrain from a name in terrains/, a path (YAML definition or OBJ/STL/PLY mesh) or an inline dict."""
+def load_terrain(ref: str | dict, store=None, registry=None) -> Terrain:
+    """Terrain from a name in terrains/, a path (YAML definition or OBJ/STL/PLY mesh) or an inline dict;
+    ``registry``: whose terrain kinds (default: the built-ins and every installed plugin's)."""
     if isinstance(ref, dict):
-        return build_terrain(ref, Path("."), "<inline terrain>", store=store)
+        return build_terrain(ref, Path("."), "<inline terrain>", store=store, registry=registry)
     path = resolve_terrain(ref)
     if path.suffix.lower() in mesh.MESH_SUFFIXES:
         return mesh.mesh_terrain(path, store=store, name=path.stem)
     data = load_yaml(path)
-    spec = validate_spec(data, str(path), path.parent)
-    return build_terrain(spec, path.parent, str(path), name=path.stem, store=store)
+    spec = validate_spec(data, str(path), path.parent, registry)
+    return build_terrain(spec, path.parent, str(path), name=path.stem, store=store, registry=registry)
