@@ -35,6 +35,7 @@ from .errors import ConfigError
 from .expressions import substitute
 from .layering import TOP_KEYS, deep_merge, merge_layer, set_override
 from .paths import locate_strings
+from .validation_errors import config_error, where_in
 from .yaml_source import LocatedDict, load_yaml
 
 
@@ -175,31 +176,7 @@ def _validate(model, data, where_of, key_prefix: str):
     try:
         return model.model_validate(data)
     except ValidationError as e:
-        err = e.errors()[0]
-        loc = [str(x) for x in err["loc"]]
-        where = where_of(loc)
-        msg = err["msg"]
-        if err["type"] == "extra_forbidden":
-            allowed = ", ".join(k for k in (getattr(model, "model_fields", {}) or {}))
-            msg = f"unknown key '{loc[-1]}'" + (f"; valid keys: {allowed}" if allowed and len(loc) == 1 else "")
-        elif "input" in err and not isinstance(err["input"], (dict, list)):
-            msg = f"{msg} (got {err['input']!r})"
-        raise ConfigError(msg, where, ".".join([key_prefix] + loc) if key_prefix else ".".join(loc)) from None
-
-
-def _where_in(node, loc):
-    """Deepest known position for a key path inside located data."""
-    best = node.where() if hasattr(node, "where") else None
-    for part in loc:
-        if isinstance(node, dict) and part in node:
-            best = (node.where(part) if hasattr(node, "where") else None) or best
-            node = node[part]
-        elif isinstance(node, list) and part.isdigit() and int(part) < len(node):
-            best = (node.where(int(part)) if hasattr(node, "where") else None) or best
-            node = node[int(part)]
-        else:
-            break
-    return best
+        raise config_error(e, model, where=where_of, key_prefix=key_prefix) from None
 
 
 # -- expansion -----------------------------------------------------------------
@@ -245,19 +222,19 @@ def _expand(data: LocatedDict, scope: dict, prefix: str | None, search_path, bas
             raise ConfigError(f"include entries are mappings with 'assembly', got {raw!r}", where, f"include[{n}]")
         # 'as' and 'params' may use the index ${i}: substituted per repetition below
         head = dict(raw, repeat=substitute(raw.get("repeat", 1), scope), assembly=substitute(raw.get("assembly", ""), scope))
-        inc = _validate(IncludeSpec, head, lambda loc: _where_in(raw, loc) or where, f"include[{n}]")
+        inc = _validate(IncludeSpec, head, lambda loc: where_in(raw, loc) or where, f"include[{n}]")
         for i in range(inc.repeat):
             iscope = dict(scope, i=i)
             params = substitute(raw.get("params", {}) or {}, iscope)
             try:
                 path = find_assembly(substitute(inc.assembly, iscope), search_path, base_dir)
             except ConfigError as e:
-                raise ConfigError(e.detail, _where_in(raw, ["assembly"]) or where, f"include[{n}].assembly") from None
+                raise ConfigError(e.detail, where_in(raw, ["assembly"]) or where, f"include[{n}].assembly") from None
             sub = locate_strings(load_yaml(path))     # its paths are relative to it
             if not isinstance(sub, dict):
                 raise ConfigError(f"included assembly {path} is not a YAML mapping (got {type(sub).__name__}); "
                                   "an assembly maps keys such as components and connections",
-                                  _where_in(raw, ["assembly"]) or where, f"include[{n}].assembly")
+                                  where_in(raw, ["assembly"]) or where, f"include[{n}].assembly")
             if not isinstance(sub.get("parameters") or {}, dict):
                 raise ConfigError("'parameters' must be a mapping", sub.where("parameters"), "parameters")
             declared = dict(sub.get("parameters") or {})
@@ -265,7 +242,7 @@ def _expand(data: LocatedDict, scope: dict, prefix: str | None, search_path, bas
             if bad:
                 raise ConfigError(f"'{bad[0]}' is not a parameter of {path.name} "
                                   f"(it declares: {', '.join(declared) or 'none'})",
-                                  _where_in(raw, ["params", bad[0]]) or where, f"include[{n}].params.{bad[0]}")
+                                  where_in(raw, ["params", bad[0]]) or where, f"include[{n}].params.{bad[0]}")
             sub_scope = deep_merge(declared, params)
             sub_scope["i"] = i
             name = substitute(raw.get("as"), iscope) if raw.get("as") else (
@@ -323,7 +300,7 @@ def _expand(data: LocatedDict, scope: dict, prefix: str | None, search_path, bas
     for n, item in enumerate(stops):
         where = stops.where(n) if hasattr(stops, "where") else None
         item = substitute(item, scope)
-        spec = _validate(StopSpec, item, lambda loc: _where_in(item, loc) or where, f"stop[{n}]")
+        spec = _validate(StopSpec, item, lambda loc: where_in(item, loc) or where, f"stop[{n}]")
         if sum(v is not None for v in (spec.above, spec.below, spec.abs_above)) != 1:
             raise ConfigError("a stop condition needs exactly one of above, below, abs_above", where, f"stop[{n}]")
         spec = spec.model_copy(update={"signal": _prefixed(spec.signal, prefix)})
@@ -388,13 +365,13 @@ def resolve(assembly: str | Path | None, *, search_path=(), config_files=(), ove
         if "type" not in raw:
             raise ConfigError(f"component '{name}' has no 'type' (a patch for a component that does not exist?)",
                               where, f"components.{name}")
-        components[name] = _validate(ComponentSpec, raw, lambda loc, raw=raw, w=where: _where_in(raw, loc) or w,
+        components[name] = _validate(ComponentSpec, raw, lambda loc, raw=raw, w=where: where_in(raw, loc) or w,
                                      f"components.{name}")
     if not components:
         raise ConfigError("the assembly has no components: nothing to simulate (give 'components', or "
                           "'include' an assembly that has some)", str(path), "components")
     sim_raw = substitute(data.get("sim") or LocatedDict(), dict(parameters))
-    sim = _validate(SimSpec, sim_raw, lambda loc: _where_in(sim_raw, loc) or data.where("sim"), "sim")
+    sim = _validate(SimSpec, sim_raw, lambda loc: where_in(sim_raw, loc) or data.where("sim"), "sim")
     return Resolved(sim=sim, parameters=dict(parameters), components=components,
                     connections=out["connections"], record=out["record"], stop=out["stop"],
                     description=str(data.get("description") or ""), where=out["where"], source=str(path))

@@ -1,7 +1,8 @@
 """The component: parameters, ports, optional continuous or discrete state.
 
-A component is a class with a frozen pydantic ``Params`` model, ports declared
-as class attributes (see :mod:`.ports`) and up to five methods::
+A component is a class with a frozen pydantic ``Params`` model, named once as
+its type argument (``class Pid(Component[PidParams])`` sets ``Pid.Params``), ports
+declared as class attributes (see :mod:`.ports`) and up to five methods::
 
     output(t, x, u, y)        write outputs into y's preallocated arrays
     continuous_state()        -> ContinuousState (initial value, layout) or None
@@ -142,6 +143,30 @@ class StopFlag:
             self.reason, self.source, self.outcome, self.kind = reason, source, outcome, kind
 
 
+def _set_params(cls) -> None:
+    """``cls.Params`` from the type argument (``class Pid(Component[PidParams])``), so the type is said
+    once; an explicit ``Params = X`` still works, and must then be the type argument when both are given."""
+    given = vars(cls).get("Params")
+    argument = _params_argument(cls)
+    if argument is None:
+        return
+    if given is not None and given is not argument:
+        raise TypeError(f"{cls.__name__}: Params = {getattr(given, '__name__', given)} differs from the type "
+                        f"argument {argument.__name__}; say it once, as Component[{argument.__name__}]")
+    cls.Params = argument
+
+
+def _params_argument(cls) -> type[BaseModel] | None:
+    """The parameters model among the type arguments of ``cls``'s own generic Component bases."""
+    for base in vars(cls).get("__orig_bases__", ()):
+        origin = get_origin(base)
+        if isinstance(origin, type) and issubclass(origin, Component):
+            found = [a for a in get_args(base) if isinstance(a, type) and issubclass(a, BaseModel)]
+            if len(found) == 1:
+                return found[0]
+    return None
+
+
 class Component(Generic[P]):
     Params: ClassVar[type[BaseModel]] = Params
     #: registry name, e.g. "pendulum"; set by the registry if left empty
@@ -158,6 +183,7 @@ class Component(Generic[P]):
 
     def __init_subclass__(cls, **kw):
         super().__init_subclass__(**kw)
+        _set_params(cls)
         ins, outs, uses, provides = {}, {}, {}, {}
         for klass in reversed(cls.__mro__):
             for name, attr in vars(klass).items():

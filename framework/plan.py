@@ -35,6 +35,7 @@ from .rates import MAX_PHASES, lcm, period_of, phase_count
 from .resources import ResourceBindingError, provider_order, resolve_uses
 from .signals import Structured
 from .stops import StopCondition, compile_stop
+from .validation_errors import config_error
 from .wiring import PortInfo, PortRef, check_compatible, parse_ref, port_infos
 
 
@@ -201,14 +202,8 @@ def _instantiate(resolved: Resolved, registry) -> tuple[dict[str, Component], di
             built[name] = cls(name, absolute_paths(cls.Params, spec.params), spec.rate,
                               uses=resolve_uses(binding[name], built))
         except ValidationError as e:
-            err = e.errors()[0]
-            loc = ".".join(str(p) for p in err["loc"])
-            msg = err["msg"].removeprefix("Value error, ")
-            if err["type"] == "extra_forbidden":
-                msg = f"unknown parameter; {cls.__name__} takes: {', '.join(cls.Params.model_fields) or 'none'}"
-            elif not isinstance(err.get("input"), (dict, list)):
-                msg += f" (got {err.get('input')!r})"
-            raise ConfigError(msg, where, f"components.{name}.params.{loc}") from None
+            raise config_error(e, cls.Params, where=where, key_prefix=f"components.{name}.params",
+                               unknown="parameter", owner=cls.__name__) from None
         except (ValueError, TypeError) as e:
             raise ConfigError(str(e), where, f"components.{name}") from None
     return {n: built[n] for n in resolved.components}, _bound(binding)

@@ -118,7 +118,6 @@ class BodyContactParams(Params):
 
 class BodyContact(Component[BodyContactParams]):
     type_name = "body_contact"
-    Params = BodyContactParams
     #: query a plane (Terrain.fast_plane) in numba (tests switch it off to compare with Terrain.query)
     fast_plane = True
 

@@ -21,7 +21,8 @@ from numba import njit
 
 from ..kernel_args import record
 from .kernels_numba import add_wrench, point_contact_force
-from .sdf_kernels import _rot, link_fixed_points, np_sum, plane_active, plane_query, sample_points  # _rot: a link's axes from its quaternion
+from ..multibody.pose_quaternions import pose_rotation
+from .sdf_kernels import link_fixed_points, np_sum, plane_active, plane_query, sample_points
 
 K, C, MU = 0, 1, 2
 
@@ -50,7 +51,7 @@ def body_contact_wrenches(m, distance, normal, material, sample, owner, poses, v
         k = owner[i]
         q = sample[i]
         b = piece_link[k]
-        _rot(poses, b, R)
+        pose_rotation(poses, b, R)
         rx, ry, rz = out_point[i, 0] - poses[b, 0], out_point[i, 1] - poses[b, 1], out_point[i, 2] - poses[b, 2]
         wx, wy, wz = vels[b, 3], vels[b, 4], vels[b, 5]
         vx = vels[b, 0] + (wy * rz - wz * ry)

@@ -27,6 +27,8 @@ import math
 import numpy as np
 from numba import njit
 
+from ..multibody.pose_quaternions import pose_rotation
+
 K, C, MU, EV_A, EV_B = range(5)
 
 
@@ -204,10 +206,7 @@ def contact_jacobian_blocks(m, distance, normal, material, owner, point, vel, po
             last = s
             b = parent_row[s]
             o = screw_row[s]
-            x, y, z, w = poses[b, 3], poses[b, 4], poses[b, 5], poses[b, 6]
-            R[0, 0], R[0, 1], R[0, 2] = 1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)
-            R[1, 0], R[1, 1], R[1, 2] = 2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)
-            R[2, 0], R[2, 1], R[2, 2] = 2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)
+            pose_rotation(poses, b, R)
             a0 = R[0, 0] * axis_B[s, 0] + R[0, 1] * axis_B[s, 1] + R[0, 2] * axis_B[s, 2]
             a1 = R[1, 0] * axis_B[s, 0] + R[1, 1] * axis_B[s, 1] + R[1, 2] * axis_B[s, 2]
             a2 = R[2, 0] * axis_B[s, 0] + R[2, 1] * axis_B[s, 1] + R[2, 2] * axis_B[s, 2]
@@ -249,6 +248,7 @@ def body_jacobian_blocks(m, distance, normal, material, sample, owner, point, ve
     Dv = np.empty((3, 3))
     Dp = np.empty((3, 3))
     W = np.empty((3, 3, 3))
+    R = np.empty((3, 3))
     e = np.empty(3)
     rc = np.empty(3)
     nrm = np.empty(3)
@@ -262,13 +262,9 @@ def body_jacobian_blocks(m, distance, normal, material, sample, owner, point, ve
         k = owner[i]
         q = sample[i]
         b = piece_link[k]
-        x, y, z, w = poses[b, 3], poses[b, 4], poses[b, 5], poses[b, 6]
-        r00, r01, r02 = 1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)
-        r10, r11, r12 = 2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)
-        r20, r21, r22 = 2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)
-        e[0] = r00 * axis_B[q, 0] + r01 * axis_B[q, 1] + r02 * axis_B[q, 2]
-        e[1] = r10 * axis_B[q, 0] + r11 * axis_B[q, 1] + r12 * axis_B[q, 2]
-        e[2] = r20 * axis_B[q, 0] + r21 * axis_B[q, 1] + r22 * axis_B[q, 2]
+        pose_rotation(poses, b, R)
+        for j in range(3):
+            e[j] = R[j, 0] * axis_B[q, 0] + R[j, 1] * axis_B[q, 1] + R[j, 2] * axis_B[q, 2]
         for j in range(3):
             nrm[j] = normal[i, j]
             vv[j] = vel[i, j]

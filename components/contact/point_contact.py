@@ -47,7 +47,6 @@ class PointContactParams(Params):
 
 class PointContact(Component[PointContactParams]):
     type_name = "point_contact"
-    Params = PointContactParams
     depth = Input(shape="n", unit="m")
     normal = Input(shape=("n", 3), unit="1")
     velocity = Input(shape=("n", 3), unit="m/s")

@@ -127,7 +127,6 @@ class ScrewSdfContactParams(Params):
 
 class ScrewSdfContact(Component[ScrewSdfContactParams]):
     type_name = "screw_sdf_contact"
-    Params = ScrewSdfContactParams
     #: query a plane (Terrain.fast_plane) in numba (tests and the bench switch it off to compare)
     fast_plane = True
 

@@ -18,24 +18,11 @@ import numpy as np
 from numba import njit
 
 from ..kernel_args import record
+from ..multibody.pose_quaternions import pose_rotation
 from .jacobian_kernels import contact_jacobian_blocks
 from .kernels_numba import add_wrench, point_contact_force
 
 K, C, MU, EV_A, EV_B = range(5)
-
-
-@njit(cache=True, inline="always")
-def _rot(poses, b, R):
-    x, y, z, w = poses[b, 3], poses[b, 4], poses[b, 5], poses[b, 6]
-    R[0, 0] = 1 - 2 * (y * y + z * z)
-    R[0, 1] = 2 * (x * y - z * w)
-    R[0, 2] = 2 * (x * z + y * w)
-    R[1, 0] = 2 * (x * y + z * w)
-    R[1, 1] = 1 - 2 * (x * x + z * z)
-    R[1, 2] = 2 * (y * z - x * w)
-    R[2, 0] = 2 * (x * z - y * w)
-    R[2, 1] = 2 * (y * z + x * w)
-    R[2, 2] = 1 - 2 * (x * x + y * y)
 
 
 @njit(cache=True)
@@ -44,7 +31,7 @@ def link_fixed_points(poses, link_row, p_B, R, out):
     (a screw's centre, a body piece's bounding-sphere centre). R is (3,3) scratch."""
     for k in range(link_row.shape[0]):
         b = link_row[k]
-        _rot(poses, b, R)
+        pose_rotation(poses, b, R)
         for i in range(3):
             out[k, i] = poses[b, i] + R[i, 0] * p_B[k, 0] + R[i, 1] * p_B[k, 1] + R[i, 2] * p_B[k, 2]
 
@@ -57,7 +44,7 @@ def sample_points(poses, active, n_active, start, points_B, parent_row, R, out_p
     for a in range(n_active):
         s = active[a]
         b = parent_row[s]
-        _rot(poses, b, R)
+        pose_rotation(poses, b, R)
         for i in range(start[s], start[s + 1]):
             for j in range(3):
                 out_points[m, j] = poses[b, j] + R[j, 0] * points_B[i, 0] + R[j, 1] * points_B[i, 1] \
@@ -111,7 +98,7 @@ def contact_wrenches(m, distance, normal, material, sample, owner, poses, vels, 
         if s != last:
             last = s
             b = parent_row[s]
-            _rot(poses, b, R)
+            pose_rotation(poses, b, R)
             ax = R[0, 0] * axis_B[s, 0] + R[0, 1] * axis_B[s, 1] + R[0, 2] * axis_B[s, 2]
             ay = R[1, 0] * axis_B[s, 0] + R[1, 1] * axis_B[s, 1] + R[1, 2] * axis_B[s, 2]
             az = R[2, 0] * axis_B[s, 0] + R[2, 1] * axis_B[s, 1] + R[2, 2] * axis_B[s, 2]
@@ -194,7 +181,7 @@ def ring_rows(poses, active, n_active, start, points_B, ring_start, ring_first, 
     for a in range(n_active):
         s = active[a]
         b = parent_row[s]
-        _rot(poses, b, R)
+        pose_rotation(poses, b, R)
         for g in range(ring_start[s], ring_start[s + 1]):
             q = ring_first[g]
             for j in range(3):
@@ -227,7 +214,7 @@ def ring_extremal(m, nr, points, distance, normal, owner, poses, axis_B, parent_
     for k in range(m, m + nr):
         s = owner[k]
         b = parent_row[s]
-        _rot(poses, b, R)
+        pose_rotation(poses, b, R)
         ax = R[0, 0] * axis_B[s, 0] + R[0, 1] * axis_B[s, 1] + R[0, 2] * axis_B[s, 2]
         ay = R[1, 0] * axis_B[s, 0] + R[1, 1] * axis_B[s, 1] + R[1, 2] * axis_B[s, 2]
         az = R[2, 0] * axis_B[s, 0] + R[2, 1] * axis_B[s, 1] + R[2, 2] * axis_B[s, 2]
@@ -269,7 +256,7 @@ def finish_extremal(m, ne, ext_row, ext_distance, ext_normal, ext_material, dist
         if cx == 0.0 and cy == 0.0 and cz == 0.0:
             continue                                    # the ring has no extremal point: samples act
         s = owner[i]
-        _rot(poses, parent_row[s], R)
+        pose_rotation(poses, parent_row[s], R)
         ax = R[0, 0] * axis_B[s, 0] + R[0, 1] * axis_B[s, 1] + R[0, 2] * axis_B[s, 2]
         ay = R[1, 0] * axis_B[s, 0] + R[1, 1] * axis_B[s, 1] + R[1, 2] * axis_B[s, 2]
         az = R[2, 0] * axis_B[s, 0] + R[2, 1] * axis_B[s, 1] + R[2, 2] * axis_B[s, 2]
@@ -336,7 +323,7 @@ def plane_rings(poses, active, n_active, start, points_B, ring_start, ring_first
     for a in range(n_active):
         s = active[a]
         b = parent_row[s]
-        _rot(poses, b, R)
+        pose_rotation(poses, b, R)
         ax = R[0, 0] * axis_B[s, 0] + R[0, 1] * axis_B[s, 1] + R[0, 2] * axis_B[s, 2]
         ay = R[1, 0] * axis_B[s, 0] + R[1, 1] * axis_B[s, 1] + R[1, 2] * axis_B[s, 2]
         az = R[2, 0] * axis_B[s, 0] + R[2, 1] * axis_B[s, 1] + R[2, 2] * axis_B[s, 2]

@@ -151,7 +151,6 @@ class BraceClimbParams(Params):
 
 class BraceClimb(Component[BraceClimbParams]):
     type_name = "brace_climb"
-    Params = BraceClimbParams
     robot = Uses(RobotModel)
 
     loads = Input(shape=None, unit="N")

@@ -77,7 +77,6 @@ def constant_setpoints(robot: RobotModel, p, owner: str) -> np.ndarray:
 
 class JointSetpoints(Component[JointSetpointsParams]):
     type_name = "joint_setpoints"
-    Params = JointSetpointsParams
     robot = Uses(RobotModel)
     setpoint = Output(shape=_nj, unit=None, feedthrough=(), names=_joints)
     rate = Output(shape=_nj, unit="rad/s", feedthrough=(), names=_joints)
@@ -123,7 +122,6 @@ _SERPENOID_INPUTS = ("amplitude", "frequency", "wavelength", "direction")
 
 class SerpenoidGait(Component[SerpenoidParams]):
     type_name = "serpenoid_gait"
-    Params = SerpenoidParams
     robot = Uses(RobotModel)
     amplitude = Input(shape=(1,), unit="rad", default=np.nan)
     frequency = Input(shape=(1,), unit="Hz", default=np.nan)

@@ -149,7 +149,6 @@ _HELIX_INPUTS = ("link_rotations", "amplitude", "frequency", "phase_step", "dire
 
 class HelicalGait(Component[HelicalGaitParams]):
     type_name = "helical_gait"
-    Params = HelicalGaitParams
     robot = Uses(RobotModel)
     link_rotations = Input(shape=lambda c: (c.robot.nl, 3, 3), unit="1", default=np.nan)
     amplitude = Input(shape=(1,), unit="rad", default=np.nan)

@@ -101,7 +101,6 @@ def _joints(c):
 
 class JointPid(Component[JointPidParams]):
     type_name = "joint_pid"
-    Params = JointPidParams
     robot = Uses(RobotModel)
 
     setpoint = Input(shape=_nj, unit=None, names=_joints)

@@ -49,7 +49,6 @@ class ScheduleParams(Params):
 
 class Schedule(Component[ScheduleParams]):
     type_name = "schedule"
-    Params = ScheduleParams
     y = Output(shape=lambda c: (c.p.n,), unit=None, feedthrough=())
 
     def setup(self):

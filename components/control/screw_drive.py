@@ -36,7 +36,6 @@ class ScrewDriveParams(Params):
 
 class ScrewDrive(Component[ScrewDriveParams]):
     type_name = "screw_drive"
-    Params = ScrewDriveParams
     robot = Uses(RobotModel)
     joint_q = Input(shape=lambda c: (c.robot.nj,), unit="rad", names=lambda c: c.robot.joints)
     joint_v = Input(shape=lambda c: (c.robot.nj,), unit="rad/s", names=lambda c: c.robot.joints)

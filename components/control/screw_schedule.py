@@ -87,7 +87,6 @@ def phase_vector(names, speeds: dict[str, float], base: np.ndarray, groups, owne
 
 class ScrewSchedule(Component[ScrewScheduleParams]):
     type_name = "screw_schedule"
-    Params = ScrewScheduleParams
     robot = Uses(RobotModel)
     setpoint = Output(shape=_nj, unit=None, feedthrough=(), names=_joints)
     rate = Output(shape=_nj, unit="rad/s", feedthrough=(), names=_joints)

@@ -34,7 +34,6 @@ def _nj(c):
 
 class JointSpringDamper(Component[SpringDamperParams]):
     type_name = "joint_spring_damper"
-    Params = SpringDamperParams
     robot = Uses(RobotModel)
 
     q = Input(shape=_nj, unit="rad")

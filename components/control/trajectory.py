@@ -103,7 +103,6 @@ def _joints(c):
 
 class CsvTrajectory(Component[CsvTrajectoryParams]):
     type_name = "csv_trajectory"
-    Params = CsvTrajectoryParams
     robot = Uses(RobotModel)
     setpoint = Output(shape=_nj, unit=None, feedthrough=(), names=_joints)
     rate = Output(shape=_nj, unit="rad/s", feedthrough=(), names=_joints)

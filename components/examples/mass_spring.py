@@ -30,7 +30,6 @@ class PointMassParams(Params):
 
 class PointMass(Component[PointMassParams]):
     type_name = "point_mass"
-    Params = PointMassParams
     f_left = Input(unit="N", default=0.0)
     f_right = Input(unit="N", default=0.0)
     x = Output(unit="m", feedthrough=())
@@ -56,7 +55,6 @@ class SpringParams(Params):
 
 class SpringDamper(Component[SpringParams]):
     type_name = "spring_damper"
-    Params = SpringParams
     x_a = Input(unit="m")
     v_a = Input(unit="m/s", default=0.0)
     x_b = Input(unit="m")

@@ -32,7 +32,6 @@ class PendulumParams(Params):
 
 class Pendulum(Component[PendulumParams]):
     type_name = "pendulum"
-    Params = PendulumParams
     tau = Input(unit="N*m", default=0.0)
     theta = Output(unit="rad", feedthrough=())
     omega = Output(unit="rad/s", feedthrough=())
@@ -60,7 +59,6 @@ class DamperParams(Params):
 
 class ViscousDamper(Component[DamperParams]):
     type_name = "viscous_damper"
-    Params = DamperParams
     omega = Input(unit="rad/s")
     tau = Output(unit="N*m", feedthrough=("omega",))
 

@@ -45,7 +45,6 @@ class _Worst:
 
 class JointLimits(Component[JointLimitsParams]):
     type_name = "joint_limits"
-    Params = JointLimitsParams
     robot = Uses(RobotModel)
 
     joint_q = Input(shape=lambda c: (c.robot.nj,), unit="rad", role=JOINT_POSITIONS)

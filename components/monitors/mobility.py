@@ -62,7 +62,6 @@ class MobilityParams(Params):
 
 class MobilityMonitor(Component[MobilityParams]):
     type_name = "mobility_monitor"
-    Params = MobilityParams
     robot = Uses(RobotModel)
 
     link_rotations = Input(shape=lambda c: (c.robot.nl, 3, 3), unit="1")

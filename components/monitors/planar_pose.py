@@ -34,7 +34,6 @@ class PlanarPoseParams(Params):
 
 class PlanarPose(Component[PlanarPoseParams]):
     type_name = "planar_pose"
-    Params = PlanarPoseParams
     robot = Uses(RobotModel)
     link_poses = Input(shape=lambda c: (c.robot.nl, 7), unit=None)
     link_rotations = Input(shape=lambda c: (c.robot.nl, 3, 3), unit="1")

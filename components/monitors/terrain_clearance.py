@@ -54,7 +54,6 @@ class _Deepest:
 
 class TerrainClearance(Component[TerrainClearanceParams]):
     type_name = "terrain_clearance"
-    Params = TerrainClearanceParams
     robot = Uses(RobotModel)
 
     terrain = Input(type=Terrain)

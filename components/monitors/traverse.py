@@ -53,7 +53,6 @@ class _Track:
 
 class TraverseEvaluation(Component[TraverseEvaluationParams]):
     type_name = "traverse_evaluation"
-    Params = TraverseEvaluationParams
     robot = Uses(RobotModel)
 
     link_poses = Input(shape=lambda c: (c.robot.nl, 7), unit=None, role=LINK_POSES)

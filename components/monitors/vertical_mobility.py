@@ -121,7 +121,6 @@ class _Window:
 
 class VerticalMobilityEvaluation(Component[VerticalMobilityParams]):
     type_name = "vertical_mobility_evaluation"
-    Params = VerticalMobilityParams
     robot = Uses(RobotModel)
 
     link_poses = Input(shape=lambda c: (c.robot.nl, 7), unit=None, role=LINK_POSES)

@@ -156,7 +156,6 @@ SIX = ("vx", "vy", "vz", "wx", "wy", "wz")
 
 class Multibody(Component[MultibodyParams]):
     type_name = "multibody"
-    Params = MultibodyParams
 
     robot = Provides(RobotModel, doc="the built robot: links, joints, frames, geometry, screws")
 

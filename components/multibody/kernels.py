@@ -27,6 +27,7 @@ import numpy as np
 from numba import njit
 
 from ..kernel_args import record
+from .pose_quaternions import quaternion_matrix
 
 ROOT, FIXED, REVOLUTE = 0, 1, 2
 
@@ -45,16 +46,7 @@ def forward_kinematics(order, parent, jtype, R0, p0, axis, qidx, qkind, vidx, mu
     for k in range(order.size):
         l = order[k]
         if jtype[l] == ROOT:
-            x, y, z, s = q[3], q[4], q[5], q[6]
-            R[l, 0, 0] = 1 - 2 * (y * y + z * z)
-            R[l, 0, 1] = 2 * (x * y - z * s)
-            R[l, 0, 2] = 2 * (x * z + y * s)
-            R[l, 1, 0] = 2 * (x * y + z * s)
-            R[l, 1, 1] = 1 - 2 * (x * x + z * z)
-            R[l, 1, 2] = 2 * (y * z - x * s)
-            R[l, 2, 0] = 2 * (x * z - y * s)
-            R[l, 2, 1] = 2 * (y * z + x * s)
-            R[l, 2, 2] = 1 - 2 * (x * x + y * y)
+            quaternion_matrix(q[3], q[4], q[5], q[6], R[l])
             for i in range(3):
                 p[l, i] = q[i]
                 vo[l, i] = R[l, i, 0] * v[0] + R[l, i, 1] * v[1] + R[l, i, 2] * v[2]

@@ -180,7 +180,6 @@ class _Camera(Component):
 
 class Camera(_Camera, Component[CameraParams]):
     type_name = "camera"
-    Params = CameraParams
     frame = Output(type=CameraFrame, feedthrough=True, role=CAMERA_FRAME, doc="this sample's image")
 
     def output(self, t, x, u, y):
@@ -190,7 +189,6 @@ class Camera(_Camera, Component[CameraParams]):
 
 class StereoCamera(_Camera, Component[StereoCameraParams]):
     type_name = "stereo_camera"
-    Params = StereoCameraParams
     left = Output(type=CameraFrame, feedthrough=True, role=CAMERA_FRAME, doc="left image")
     right = Output(type=CameraFrame, feedthrough=True, role=CAMERA_FRAME, doc="right image, baseline m to the right")
 

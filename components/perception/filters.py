@@ -77,7 +77,6 @@ class ImageNoiseParams(Params):
 
 class ImageNoise(ImageFilter, Component[ImageNoiseParams]):
     type_name = "image_noise"
-    Params = ImageNoiseParams
 
     def apply(self, frame, memo):
         p = self.p
@@ -95,7 +94,6 @@ class VignettingParams(Params):
 
 class Vignetting(ImageFilter, Component[VignettingParams]):
     type_name = "vignetting"
-    Params = VignettingParams
 
     def gain(self, model) -> np.ndarray:
         p = self.p
@@ -123,7 +121,6 @@ class GammaParams(Params):
 
 class Gamma(ImageFilter, Component[GammaParams]):
     type_name = "gamma"
-    Params = GammaParams
 
     def apply(self, frame, memo):
         img = frame.image
@@ -138,7 +135,6 @@ class ColorAdjustParams(Params):
 
 class ColorAdjust(ImageFilter, Component[ColorAdjustParams]):
     type_name = "color_adjust"
-    Params = ColorAdjustParams
 
     def apply(self, frame, memo):
         p = self.p

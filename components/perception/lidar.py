@@ -112,7 +112,6 @@ class LidarParams(SensorMount, Params):
 
 class Lidar(Component[LidarParams]):
     type_name = "lidar"
-    Params = LidarParams
     robot = Uses(RobotModel)
 
     world = Input(type=SensorWorld)

@@ -54,7 +54,6 @@ class SensorSceneParams(Params):
 
 class SensorScene(Component[SensorSceneParams]):
     type_name = "sensor_scene"
-    Params = SensorSceneParams
     robot = Uses(RobotModel, required=False, doc="the link meshes")
 
     terrain = Input(type=Terrain, required=False)

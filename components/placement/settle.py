@@ -157,7 +157,6 @@ class SettleParams(Params):
 
 class Settle(Component[SettleParams]):
     type_name = "placement_settle"
-    Params = SettleParams
 
     robot = Uses(RobotModel, doc="the multibody's robot: link/joint order, masses, joint axes, screws")
 

@@ -25,6 +25,7 @@ from typing import Literal
 import numpy as np
 from pydantic import Field, model_validator
 
+from snakesim.components.multibody.pose_quaternions import rotation_matrices
 from snakesim.framework import Params
 
 Vec3 = tuple[float, float, float]
@@ -40,10 +41,7 @@ class Pose(Params):
 
     def rotation(self) -> np.ndarray:
         if self.quaternion is not None:
-            x, y, z, w = np.asarray(self.quaternion, float) / np.linalg.norm(self.quaternion)
-            return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                             [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                             [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+            return rotation_matrices(np.asarray(self.quaternion, float) / np.linalg.norm(self.quaternion))
         r, p, y = self.rpy
         cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
         rz = np.array([[cy, -sy, 0.0], [sy, cy, 0.0], [0.0, 0.0, 1.0]])

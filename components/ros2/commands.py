@@ -122,7 +122,6 @@ def _joints(c):
 
 class Ros2Commands(Component[Ros2CommandsParams]):
     type_name = "ros2_commands"
-    Params = Ros2CommandsParams
     robot = Uses(RobotModel)
 
     q = Input(shape=_nj, unit="rad", default=np.nan, role=JOINT_POSITIONS)

@@ -41,15 +41,14 @@ def gid(entity, size: int) -> list[int]:
     return list(raw) + [0] * (size - len(raw))
 
 
-class NodeAnnouncer:
-    """Publishes (and re-publishes on :meth:`announce`) a participant's ``ros_discovery_info``."""
+class NodeEntities:
+    """The ``ros_discovery_info`` message of a participant that hosts one node ``namespace``/``node``.
 
-    def __init__(self, participant, node: str, namespace: str = "/", distro: str = "humble"):
-        from cyclonedds.pub import DataWriter
-        from cyclonedds.topic import Topic
+    It describes; it writes nothing: the participant (:meth:`.transport.Ros2Participant.announce`) owns
+    the writer and its QoS."""
 
+    def __init__(self, node: str, namespace: str = "/", distro: str = "humble"):
         from .messages import ros_type
-        from .transport import LATCHED_QOS
 
         if distro not in DISTROS:
             raise ValueError(f"ros_distro '{distro}': one of {', '.join(DISTROS)}")
@@ -58,18 +57,13 @@ class NodeAnnouncer:
         self.Gid = ros_type("rmw_dds_common/msg/Gid", store_name=DISTROS[distro])
         self.size = len(self.Gid().data)
         self.node, self.namespace = node, namespace
-        self.participant = participant
-        self.writer = DataWriter(participant, Topic(participant, TOPIC, self.Info), LATCHED_QOS.qos())
 
-    def message(self, readers, writers):
-        """This participant's ParticipantEntitiesInfo: one node with these readers and writers."""
+    def message(self, participant, readers, writers):
+        """``participant``'s ParticipantEntitiesInfo: the one node, with these readers and writers."""
         def g(entity):
             return self.Gid(data=gid(entity, self.size))
 
-        return self.Info(gid=g(self.participant),
+        return self.Info(gid=g(participant),
                          node_entities_info_seq=[self.Node(node_namespace=self.namespace, node_name=self.node,
                                                            reader_gid_seq=[g(r) for r in readers],
                                                            writer_gid_seq=[g(w) for w in writers])])
-
-    def announce(self, readers, writers) -> None:
-        self.writer.write(self.message(readers, writers))

@@ -73,7 +73,6 @@ class ParameterCommandsParams(DdsEndpoint):
 class ParameterCommands(Component[ParameterCommandsParams]):
     """Base of the ParameterEvent command sources (module docstring); not registered itself."""
 
-    Params = ParameterCommandsParams
     TOPIC: str = ""
     NODE: str = ""
     PARAMETERS: dict[str, Admissible] = {}

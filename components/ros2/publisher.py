@@ -91,7 +91,6 @@ def _nj(c):
 
 class Ros2Publisher(Component[Ros2PublisherParams]):
     type_name = "ros2_publisher"
-    Params = Ros2PublisherParams
     is_sink = True
 
     robot = Uses(RobotModel, required=False, doc="joint and link names, the URDF")

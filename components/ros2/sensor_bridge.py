@@ -48,7 +48,6 @@ def sensor_input_name(i: int) -> str:
 
 class Ros2SensorBridge(Component[Ros2SensorBridgeParams]):
     type_name = "ros2_sensor_bridge"
-    Params = Ros2SensorBridgeParams
     is_sink = True
 
     def setup(self):

@@ -105,7 +105,6 @@ class Ros2SimControlParams(DdsEndpoint):
 
 class Ros2SimControl(Component[Ros2SimControlParams]):
     type_name = "ros2_sim_control"
-    Params = Ros2SimControlParams
     is_sink = True           # update() at its rate: the control ticks
     robot = Uses(RobotModel, required=False, doc="joint names and state layout for placement requests")
 

@@ -51,7 +51,6 @@ class Ros2TetherCommandsParams(DdsEndpoint):
 
 class Ros2TetherCommands(Component[Ros2TetherCommandsParams]):
     type_name = "ros2_tether_commands"
-    Params = Ros2TetherCommandsParams
 
     attached = Output(shape=lambda c: (c.p.tethers,), unit="1", feedthrough=(), may_be_nan=True)
     rejected = Output(shape=(1,), unit="1", feedthrough=())

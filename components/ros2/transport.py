@@ -44,6 +44,8 @@ from pydantic import Field
 
 from snakesim.framework import Params
 
+from .node_graph import TOPIC as DISCOVERY_TOPIC, NodeEntities
+
 LOOPBACK = "127.0.0.1"
 #: highest participant index a loopback (unicast) discovery probes; ~this many processes per domain per host
 MAX_PARTICIPANTS = 32
@@ -189,15 +191,19 @@ class Ros2Participant:
 
     def announce(self, node: str, distro: str = "humble") -> None:
         """Publish this participant's readers and writers as ROS node ``/<node>`` on ``ros_discovery_info``
-        (:mod:`.node_graph`: ``ros2 node list`` shows it); call again after adding endpoints."""
+        (:mod:`.node_graph`: ``ros2 node list`` shows it); call again after adding endpoints. The
+        announcement's own writer (latched, as rmw_cyclonedds makes it) is not one of the node's."""
+        from cyclonedds.pub import DataWriter
         from cyclonedds.sub import DataReader
 
-        from .node_graph import NodeAnnouncer
-
         if self._announcer is None:
-            self._announcer = NodeAnnouncer(self.participant, node, distro=distro)
-        self._announcer.announce([e for e in self._entities if isinstance(e, DataReader)],
-                                 [e for e in self._entities if not isinstance(e, DataReader)])
+            info = NodeEntities(node, distro=distro)
+            writer = DataWriter(self.participant, self._topic(DISCOVERY_TOPIC, info.Info, DISCOVERY_TOPIC),
+                                LATCHED_QOS.qos())
+            self._announcer = info, writer
+        info, writer = self._announcer
+        writer.write(info.message(self.participant, [e for e in self._entities if isinstance(e, DataReader)],
+                                  [e for e in self._entities if not isinstance(e, DataReader)]))
 
     def close(self) -> None:
         self._announcer = None

@@ -59,7 +59,6 @@ class FtsParams(Params):
 
 class ForceTorqueSensors(Component[FtsParams]):
     type_name = "force_torque_sensors"
-    Params = FtsParams
     robot = Uses(RobotModel)
 
     joint_wrenches = Input(shape=lambda c: (c.robot.nl, 6), unit=None, role=JOINT_WRENCHES)

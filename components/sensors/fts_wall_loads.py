@@ -52,7 +52,6 @@ class FtsWallLoadsParams(Params):
 
 class FtsWallLoads(Component[FtsWallLoadsParams]):
     type_name = "fts_wall_loads"
-    Params = FtsWallLoadsParams
     robot = Uses(RobotModel)
 
     wrench = Input(shape=lambda c: (len(c.sensor_links), 6), unit=None)

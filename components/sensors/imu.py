@@ -51,7 +51,6 @@ def _nl(*tail):
 
 class Imu(Component[ImuParams]):
     type_name = "imu"
-    Params = ImuParams
     robot = Uses(RobotModel)
 
     link_rotations = Input(shape=_nl(3, 3), unit="1")

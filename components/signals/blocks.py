@@ -20,7 +20,6 @@ class GainParams(Params):
 
 class Gain(Component[GainParams]):
     type_name = "gain"
-    Params = GainParams
     u = Input(shape="n", unit=None)
     y = Output(shape="n", unit=None, feedthrough=("u",))
 
@@ -37,7 +36,6 @@ class Sum(Component[SumParams]):
     """Unconnected inputs read zero, so one block serves two to four terms."""
 
     type_name = "sum"
-    Params = SumParams
     u0 = Input(shape="n", unit=None, default=0.0)
     u1 = Input(shape="n", unit=None, default=0.0)
     u2 = Input(shape="n", unit=None, default=0.0)
@@ -62,7 +60,6 @@ class ZeroOrderHold(Component[ZohParams]):
     """Samples its input at its rate; the output is the previous sample (a unit delay)."""
 
     type_name = "zero_order_hold"
-    Params = ZohParams
     u = Input(shape="n", unit=None)
     y = Output(shape="n", unit=None, feedthrough=())
 

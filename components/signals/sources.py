@@ -33,7 +33,6 @@ class Constant(Component[ConstantParams]):
 
     type_name = "constant"
     time_invariant = True
-    Params = ConstantParams
     y = Output(shape="n", unit=None, feedthrough=())
 
     def setup(self):
@@ -52,7 +51,6 @@ class Step(Component[StepParams]):
     """y = initial for t < t_step, value after."""
 
     type_name = "step"
-    Params = StepParams
     y = Output(shape="n", unit=None, feedthrough=())
 
     def setup(self):
@@ -75,7 +73,6 @@ class Sine(Component[SineParams]):
     """y = offset + amplitude · sin(2π f t + phase)."""
 
     type_name = "sine"
-    Params = SineParams
     y = Output(shape="n", unit=None, feedthrough=())
 
     def setup(self):

@@ -36,7 +36,6 @@ class TerrainSourceParams(Params):
 class TerrainSource(Component[TerrainSourceParams]):
     type_name = "terrain"
     time_invariant = True  # loaded once; the same object every step
-    Params = TerrainSourceParams
     terrain = Output(type=Terrain, feedthrough=(), doc="the terrain query object")
 
     def setup(self):

@@ -30,13 +30,14 @@ from __future__ import annotations
 import difflib
 from importlib.resources import files
 from pathlib import Path
-from typing import Annotated, Literal, Union, get_args
+from typing import Annotated, Literal, Union
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError, field_validator, model_validator
 
 from snakesim.components.materials import Material, material_from_mapping, read_material_file
 from snakesim.framework import ConfigError
+from snakesim.framework.validation_errors import config_error, where_in
 from snakesim.framework.yaml_source import load_yaml
 
 from . import analytic, dem, mesh, obstacles
@@ -296,68 +297,6 @@ def _kinds(registry=None) -> dict:
 
 # -- validation ------------------------------------------------------------------
 
-def _where(data, loc) -> str | None:
-    node, best = data, data.where() if hasattr(data, "where") else None
-    for part in loc:
-        if isinstance(node, dict) and part in node:
-            best = node.where(part) if hasattr(node, "where") else best
-            node = node[part]
-        elif isinstance(node, list) and isinstance(part, int) and part < len(node):
-            best = node.where(part) if hasattr(node, "where") else best
-            node = node[part]
-        else:
-            break
-    return best
-
-
-def _message(err: dict) -> str:
-    msg = err["msg"]
-    if err["type"] == "value_error":
-        return msg.removeprefix("Value error, ")
-    if "input" in err and not isinstance(err["input"], dict):
-        got = repr(err["input"])
-        return f"{msg} (got {got if len(got) <= 80 else got[:77] + '...'})"
-    return msg
-
-
-def _short_tuple(err: dict, loc: list, model) -> tuple[list, str] | None:
-    """A list with too few values is reported by pydantic as its first missing item: say so."""
-    if err["type"] != "missing" or not loc or not isinstance(loc[-1], int) or not isinstance(err.get("input"), list):
-        return None
-    holder = _model_at(model, loc[:-1])
-    field = holder.model_fields.get(loc[-2]) if holder is not None and isinstance(loc[-2], str) else None
-    want = f"{len(get_args(field.annotation))} values" if field is not None else f"more than {len(err['input'])} values"
-    return loc[:-1], f"needs {want}, got {len(err['input'])}: {err['input']!r}"
-
-
-def _model_at(model, loc):
-    """The schema model that holds the key at the end of ``loc`` (None if the path leaves the schema)."""
-    for part in loc[:-1]:
-        if isinstance(part, int):
-            continue                                   # a list entry: same item model
-        field = model.model_fields.get(part) if model is not None else None
-        if field is None:
-            return None
-        model = _model_in(field.annotation)
-    return model
-
-
-def _model_in(annotation):
-    """The BaseModel class inside an annotation such as ``X``, ``list[X]`` or ``X | None``."""
-    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
-        return annotation
-    for arg in get_args(annotation):
-        found = _model_in(arg)
-        if found is not None:
-            return found
-    return None
-
-
-def _unknown_key(key, valid) -> str:
-    close = difflib.get_close_matches(str(key), list(valid), n=1)
-    return f"unknown key '{key}'" + (f"; did you mean '{close[0]}'?" if close else "") + f" valid keys: {', '.join(valid)}"
-
-
 def validate_spec(data, source: str = "<terrain>", base_dir: Path | None = None, registry=None):
     """dict -> spec model of its kind (the kinds ``registry`` holds: default, the built-ins and every
     installed plugin's); errors name the file:line and the key. ``{include: FILE}`` entries of
@@ -371,26 +310,15 @@ def validate_spec(data, source: str = "<terrain>", base_dir: Path | None = None,
         try:
             terrain_kind(data["kind"], registry)          # a name two plugins registered: say which
         except Exception as e:                            # noqa: BLE001 -- RegistryError
-            raise ConfigError(str(e), _where(data, ["kind"]) or source, "kind") from None
+            raise ConfigError(str(e), where_in(data, ["kind"]) or source, "kind") from None
     spec_of_kind = {name: k.spec for name, k in kinds.items()}
     data_in = data
     data = _expand_materials(data, Path(".") if base_dir is None else Path(base_dir), source)
     try:
         return _adapter(kinds).validate_python(dict(data))
     except ValidationError as e:
-        errs = e.errors()
-        err = next((x for x in errs if x["type"] == "extra_forbidden"), errs[0])   # a typo explains 'missing'
-        loc = [x for x in err["loc"] if not (isinstance(x, str) and x == data.get("kind"))]
-        msg = _message(err)
-        short = _short_tuple(err, loc, spec_of_kind.get(data.get("kind")))
-        if short is not None:
-            loc, msg = short
-        if err["type"] == "extra_forbidden":
-            model = _model_at(spec_of_kind.get(data.get("kind")), loc)
-            msg = f"unknown key '{loc[-1]}'"
-            if model is not None:
-                msg = _unknown_key(loc[-1], model.model_fields)
-        raise ConfigError(msg, _where(data_in, loc) or source, ".".join(str(x) for x in loc) or None) from None
+        raise config_error(e, spec_of_kind.get(data.get("kind")), where=lambda loc: where_in(data_in, loc) or source,
+                           drop=data.get("kind")) from None
 
 
 # -- materials: inline entries and {include: FILE} ------------------------------------

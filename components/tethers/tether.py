@@ -62,7 +62,6 @@ def _n(c):
 
 class Tethers(Component[TetherParams]):
     type_name = "tethers"
-    Params = TetherParams
     robot = Uses(RobotModel)
 
     link_rotations = Input(shape=lambda c: (c.robot.nl, 3, 3), unit="1")

@@ -35,7 +35,6 @@ def _shape(c):
 
 class WrenchSum(Component[WrenchSumParams]):
     type_name = "wrench_sum"
-    Params = WrenchSumParams
     robot = Uses(RobotModel, required=False)
     u0 = Input(shape=_shape, unit=None, default=0.0)
     u1 = Input(shape=_shape, unit=None, default=0.0)

@@ -134,7 +134,6 @@ def sensor_input_name(i: int) -> str:
 
 class RerunSink(Component[RerunSinkParams]):
     type_name = "rerun_viewer"
-    Params = RerunSinkParams
     is_sink = True
 
     robot = Uses(RobotModel, required=False, doc="the robot drawn: link rows and URDF visuals")

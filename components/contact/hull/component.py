@@ -96,7 +96,6 @@ class HullContactParams(Params):
 
 class HullContact(Component[HullContactParams]):
     type_name = "hull_contact"
-    Params = HullContactParams
 
     robot = Uses(RobotModel)
     link_poses = Input(shape=lambda c: (c.robot.nl, 7), unit=None)

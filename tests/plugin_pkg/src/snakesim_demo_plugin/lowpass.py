@@ -39,7 +39,6 @@ class LowPass(Component[LowPassParams]):
     """First-order low-pass filter τ ẏ = u − y (demo plugin)."""
 
     type_name = "demo_lowpass"      # third-party names carry a prefix: no clash with built-ins
-    Params = LowPassParams
     u = Input(shape="n", unit=None, doc="signal to filter")
     y = Output(shape="n", unit=None, feedthrough=(), doc="filtered signal")
 
