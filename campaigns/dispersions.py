@@ -260,6 +260,27 @@ def sample(df: DispersionFile, n: int, seed: int | None = None) -> list[dict]:
     return [{d.path: cols[d.path][i] for d in df.dispersions} for i in range(n)]
 
 
+def sample_run(df: DispersionFile, run: int, seed: int | None = None) -> dict:
+    """Run ``run``'s values alone, ``{path: value}`` in file order, without drawing the others: what
+    :func:`sample` gives as row ``run`` for any N > ``run`` (a random draw is keyed by (seed, run,
+    parameter), a grid point is ``run mod G``). A Latin-hypercube entry is a design over all N runs, so
+    here it is a random draw from its distribution (the stratification needs N); what a Gymnasium
+    environment's episode ``run`` uses (snakesim.gym)."""
+    if isinstance(run, bool) or not isinstance(run, int) or run < 0:
+        raise ConfigError(f"the run index must be an integer >= 0, got {run!r}", "run")
+    seed = df.seed if seed is None else seed
+    out: dict = {}
+    grids = [d for d in df.dispersions if d.dist == "grid"]
+    if grids:
+        sizes = [len(d.args["values"]) for d in grids]
+        idx = np.unravel_index(run % int(np.prod(sizes)), sizes)
+        out.update({d.path: d.args["values"][int(i)] for d, i in zip(grids, idx)})
+    for j, d in enumerate(df.dispersions):
+        if d.dist != "grid":
+            out[d.path] = d.ppf(np.array([_uniforms(seed, run, j)]))[0]
+    return {d.path: out[d.path] for d in df.dispersions}
+
+
 def set_item(path: str, value) -> str:
     """``path=value`` as ``--set`` reads it back (floats exactly: repr round-trips float64)."""
     import yaml

@@ -10,7 +10,7 @@ from click.testing import CliRunner
 from scipy import stats
 
 from snakesim.campaigns.campaign import prepare
-from snakesim.campaigns.dispersions import load_dispersions, sample, set_item
+from snakesim.campaigns.dispersions import load_dispersions, sample, sample_run, set_item
 from snakesim.campaigns.runner import SceneSpec
 from snakesim.framework.errors import ConfigError
 from snakesim.framework.layering import parse_set
@@ -80,6 +80,32 @@ def test_random_draws_depend_only_on_seed_and_run_index(tmp_path):
     for r in s10:
         for p, v in r.items():
             assert parse_set(set_item(p, v))[1] == v
+
+
+
+def test_one_runs_values_alone_are_the_sweeps_row(tmp_path):
+    """sample_run (a Gymnasium episode's values, snakesim.gym) draws run i without the others: the row
+    sample() gives for any N, for random draws and grid points; a Latin-hypercube entry is a plain draw."""
+    df = load_dispersions(_file(tmp_path, """
+        seed: 5
+        dispersions:
+          a: {dist: uniform, low: 0.0, high: 1.0}
+          b: {dist: log_uniform, low: 0.5, high: 2.0}
+          c: {dist: choice, values: [x, y, z], weights: [1, 2, 1]}
+          g: {dist: grid, values: [1, 2, 3]}
+          h: {dist: grid, low: 0.0, high: 1.0, num: 2}
+          n: {dist: truncated_normal, mean: 0.0, std: 1.0, low: -1.0, high: 1.0}
+    """))
+    rows = sample(df, 14, seed=9)
+    assert [sample_run(df, i, seed=9) for i in range(14)] == rows
+    assert sample_run(df, 3) == sample(df, 4)[3]
+    lhs = load_dispersions(_file(tmp_path, """
+        dispersions:
+          l: {dist: latin_hypercube, low: 2.0, high: 3.0}
+    """, "l.yaml"))
+    assert 2.0 < sample_run(lhs, 0, seed=1)["l"] < 3.0
+    with pytest.raises(ConfigError, match="run index"):
+        sample_run(df, -1)
 
 
 SCENE = SceneSpec("pendulum")

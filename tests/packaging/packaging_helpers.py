@@ -31,7 +31,7 @@ import pytest
 
 REPO = Path(__file__).resolve().parents[2]
 #: the top-level folders setup.py maps onto the snakesim namespace
-PROJECT_FOLDERS = ("framework", "components", "campaigns", "assemblies", "robots", "terrains", "configs")
+PROJECT_FOLDERS = ("framework", "components", "campaigns", "assemblies", "robots", "terrains", "configs", "gymenv")
 PROJECT_FILES = ("pyproject.toml", "setup.py", "README.md", "LICENSE")
 
 _PARENT_HOOK = '''"""Added by snakesim's packaging tests: see the parent environment's packages."""
