@@ -27,6 +27,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import io
 import math
 
 import numpy as np
@@ -209,9 +210,13 @@ class Recorder:
             return
         try:
             while self._written < len(self.chunks):
-                np.savetxt(fh, self.chunks[self._written], fmt="%.17g", delimiter=",")
+                # formatted whole, then one write and a flush: a process killed while formatting leaves no torn
+                # rows (savetxt straight into the file wrote row by row through the buffer)
+                text = io.StringIO()
+                np.savetxt(text, self.chunks[self._written], fmt="%.17g", delimiter=",")
+                fh.write(text.getvalue())
+                fh.flush()      # in the OS's hands: a killed process keeps it
                 self._written += 1
-            fh.flush()      # in the OS's hands: a killed process keeps it
         except OSError as e:      # e.g. a full disk mid-run
             raise SnakesimError(f"could not write the run's signals to {self._path}: {e.strerror or e}") from None
 
