@@ -96,6 +96,23 @@ def snakesim_register_terrain_kinds(registry):
 
 
 @hookimpl
+def snakesim_register_robot_designs(registry):
+    # the designs a multibody's `design:` can name: the EELS family (robots/designs.py)
+    from snakesim.robots.registration import builtin_robot_designs
+
+    for design in builtin_robot_designs():
+        registry.add_robot_design(design)
+
+
+@hookimpl
+def snakesim_register_ray_casters(registry):
+    # the back ends sensor_scene's `ray_caster` can name: embree (perception/ray_caster.py)
+    from .perception.ray_caster import EMBREE
+
+    registry.add_ray_caster(EMBREE)
+
+
+@hookimpl
 def snakesim_cli_shorthands():
     # scene parameters every robot scene declares: swapping the robot or the
     # terrain is then one flag on any scene

@@ -25,6 +25,21 @@ def snakesim_register_terrain_kinds(registry):
 
 
 @hookspec
+def snakesim_register_robot_designs(registry):
+    """Add robot designs with ``registry.add_robot_design(design)``: a ``snakesim.robots.RobotDesign``
+    (the ``design:`` value of a multibody, a builder returning the URDF and its metadata sidecar
+    mapping, defaults such as the module count)."""
+
+
+@hookspec
+def snakesim_register_ray_casters(registry):
+    """Add ray-casting back ends with ``registry.add_ray_caster(backend)``: a
+    ``snakesim.components.perception.ray_casting.RayCasterBackend`` (the name ``sensor_scene``'s
+    ``ray_caster`` parameter selects, and the builders of its static scenes and of the ``RayCaster``
+    the sensors cast into at each instant)."""
+
+
+@hookspec
 def snakesim_assembly_paths():
     """Return folders (paths or importlib Traversables) holding assembly YAML files."""
 

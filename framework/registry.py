@@ -40,6 +40,10 @@ class Registry:
         self.integrators: dict[str, type] = {}
         #: terrain kind name (the ``kind:`` of terrain YAML) -> TerrainKind, in registration order
         self.terrain_kinds: dict[str, object] = {}
+        #: robot design name (the multibody's ``design:``) -> RobotDesign, in registration order
+        self.robot_designs: dict[str, object] = {}
+        #: ray-casting back end name (sensor_scene's ``ray_caster``) -> RayCasterBackend
+        self.ray_casters: dict[str, object] = {}
         self.origins: dict[str, str] = {}
         self.pm = plugin_manager
         #: name -> the clashing registrations ("plugin: module.Class"), for names two plugins registered
@@ -107,6 +111,49 @@ class Registry:
             return
         self.terrain_kinds[name] = kind
         self.origins[f"terrain kind:{name}"] = self.current_plugin or "?"
+
+    def add_robot_design(self, design) -> None:
+        """A ``RobotDesign`` (snakesim.robots.registration): its ``name`` is the multibody's ``design:``."""
+        from snakesim.robots.registration import RobotDesign
+
+        if not isinstance(design, RobotDesign):
+            raise RegistryError(f"{design!r} is not a snakesim RobotDesign")
+        name, key = design.name, f"robot design:{design.name}"
+        where = f"{self.current_plugin or '?'}: {getattr(design.build, '__module__', '?')}"
+        if key in self.clashes:
+            self.clashes[key].append(where)
+            return
+        if name in self.robot_designs and self.robot_designs[name] is not design:
+            first = f"{self.origins.get(key, '?')}: {getattr(self.robot_designs[name].build, '__module__', '?')}"
+            if self.current_plugin is None:
+                raise RegistryError(f"robot design '{name}' registered twice: {first} and {where}")
+            self.clashes[key] = [first, where]
+            del self.robot_designs[name]
+            return
+        self.robot_designs[name] = design
+        self.origins[key] = self.current_plugin or "?"
+
+    def add_ray_caster(self, backend) -> None:
+        """A ``RayCasterBackend`` (snakesim.components.perception.ray_casting): its ``name`` is the value
+        of sensor_scene's ``ray_caster``."""
+        from snakesim.components.perception.ray_casting import RayCasterBackend
+
+        if not isinstance(backend, RayCasterBackend):
+            raise RegistryError(f"{backend!r} is not a snakesim RayCasterBackend")
+        name, key = backend.name, f"ray caster:{backend.name}"
+        where = f"{self.current_plugin or '?'}: {getattr(backend.world, '__module__', '?')}"
+        if key in self.clashes:
+            self.clashes[key].append(where)
+            return
+        if name in self.ray_casters and self.ray_casters[name] is not backend:
+            first = f"{self.origins.get(key, '?')}: {getattr(self.ray_casters[name].world, '__module__', '?')}"
+            if self.current_plugin is None:
+                raise RegistryError(f"ray caster '{name}' registered twice: {first} and {where}")
+            self.clashes[key] = [first, where]
+            del self.ray_casters[name]
+            return
+        self.ray_casters[name] = backend
+        self.origins[key] = self.current_plugin or "?"
 
     def _clashed(self, kind: str, name: str) -> None:
         both = self.clashes.get(f"{kind}:{name}")
@@ -234,6 +281,18 @@ def build_registry(load_entry_points: bool = True) -> Registry:
     _register_each(pm, "snakesim_register_components", reg)
     _register_each(pm, "snakesim_register_integrators", reg)
     _register_each(pm, "snakesim_register_terrain_kinds", reg)
+    _register_each(pm, "snakesim_register_robot_designs", reg)
+    _register_each(pm, "snakesim_register_ray_casters", reg)
+    return reg
+
+
+@lru_cache(maxsize=1)
+def default_robot_designs() -> Registry:
+    """A registry holding only the robot designs (built-ins plus installed plugins): what building a robot
+    reads, without importing every component. Clashing names raise where used (``robot_design``)."""
+    pm = make_plugin_manager()
+    reg = Registry(pm)
+    _register_each(pm, "snakesim_register_robot_designs", reg)
     return reg
 
 
@@ -244,6 +303,16 @@ def default_terrain_kinds() -> Registry:
     pm = make_plugin_manager()
     reg = Registry(pm)
     _register_each(pm, "snakesim_register_terrain_kinds", reg)
+    return reg
+
+
+@lru_cache(maxsize=1)
+def default_ray_casters() -> Registry:
+    """A registry holding only the ray-casting back ends (built-ins plus installed plugins): what
+    sensor_scene's ``ray_caster`` is checked against. Clashing names raise where used."""
+    pm = make_plugin_manager()
+    reg = Registry(pm)
+    _register_each(pm, "snakesim_register_ray_casters", reg)
     return reg
 
 

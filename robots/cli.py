@@ -22,13 +22,21 @@ GENERATED_MESH_DIR, WRITTEN_MESH_DIR = "../meshes/", "meshes/"
 def write_urdf(design: str, modules: int | None, head: bool | None, path: Path) -> tuple[Path, list[Path]]:
     """Write ``design`` with ``modules`` modules to ``path`` and its screw meshes to ``path.parent/meshes``;
     returns (the URDF, the meshes). ValueError/KeyError name a bad design or module count."""
-    from .description import generate_robot
+    from .designs import DESIGNS
+    from .registration import robot_design
     from .screw_mesh import write_screw_mesh
 
-    robot = generate_robot(design, modules=modules, head=head)
+    robot = robot_design(design).describe(modules, head)
     path.parent.mkdir(parents=True, exist_ok=True)
     text = robot.urdf.replace(f'filename="{GENERATED_MESH_DIR}', f'filename="{WRITTEN_MESH_DIR}')
     path.write_text(text, encoding="utf-8")
+    if design not in DESIGNS and robot.metadata:
+        # a plugin's design: its metadata sidecar beside the URDF, so `--urdf FILE` alone finds it
+        import yaml
+
+        stem = path.name[: -len(path.suffix)] if path.suffix else path.name
+        path.with_name(stem + ".snakesim.yaml").write_text(
+            yaml.safe_dump(dict(robot.metadata), sort_keys=False), encoding="utf-8")
     mesh_dir = path.parent / WRITTEN_MESH_DIR
     if robot.screw_meshes:
         mesh_dir.mkdir(exist_ok=True)
@@ -43,7 +51,7 @@ def robot():
 
 @robot.command("urdf")
 @click.option("--robot", "design", required=True,
-              help="Design: eels-concept, eels-1.0, eels-1.0-front, eels-1.5, mini-eels-1.0.")
+              help="Design: eels-concept, eels-1.0, eels-1.0-front, eels-1.5, mini-eels-1.0, or a plugin's.")
 @click.option("--modules", type=int, default=None, help="Number of modules (default: the design's).")
 @click.option("--head/--no-head", default=None, help="Perception head / head cap on or off (default: the design's).")
 @click.option("-o", "--output", required=True, type=click.Path(dir_okay=False, path_type=Path),

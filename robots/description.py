@@ -43,7 +43,9 @@ class RobotDescription:
         variant (then relative mesh paths resolve against :attr:`base_dir`).
     metadata: the sidecar dict (see module docstring). For a user URDF it is
         the baseline's: names are guaranteed identical by the structure
-        check, numbers (e.g. screw radius) are the baseline's.
+        check, numbers (e.g. screw radius) are the baseline's. A registered
+        third-party design's is its validated sidecar mapping (robots/sidecar.py).
+    parameters: the generator's parameters; None for a third-party design.
     source: "generated" or "user".
     """
 
@@ -51,7 +53,7 @@ class RobotDescription:
     modules: int
     urdf: str
     metadata: dict[str, Any]
-    parameters: RobotParameters
+    parameters: RobotParameters | None
     screw_meshes: Mapping[str, ScrewGeometry] = field(default_factory=dict)
     urdf_path: Path | None = None
     source: Literal["generated", "user"] = "generated"

@@ -7,13 +7,15 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from .description import URDF_DIR, RobotDescription, generate_robot
+from .description import URDF_DIR, RobotDescription
+from .sidecar import check_against_urdf, read_sidecar, sidecar_path
 from .structure import check_structure, parse_structure, read_urdf
 
 
 def load_robot(design: str, modules: int | None = None, head: bool | None = None,
                urdf: str | Path | None = None, **params: Any) -> RobotDescription:
-    """Robot description for ``design`` (a key of :data:`~snakesim.robots.DESIGNS`).
+    """Robot description for ``design``: a registered design (snakesim's own, :data:`~snakesim.robots.DESIGNS`,
+    or a plugin's, ``snakesim_register_robot_designs``).
 
     modules: module count, 1..100 (design default if None).
     head: perception head / head cap on or off, for designs that have one.
@@ -21,17 +23,23 @@ def load_robot(design: str, modules: int | None = None, head: bool | None = None
         the structure of the generated baseline for the same design, module
         count and head option; numbers may differ. Otherwise
         :class:`~snakesim.robots.structure.StructureMismatchError` lists
-        every difference.
-    params: ``hand``, ``lead_angle``, ``screw_radius``, ``module_length``.
+        every difference. A metadata sidecar beside it (``NAME.snakesim.yaml``,
+        robots/sidecar.py) replaces the baseline's keys it declares (screws,
+        joints, armature_per_effort).
+    params: ``hand``, ``lead_angle``, ``screw_radius``, ``module_length`` (snakesim's designs; a
+        plugin's design takes its own).
 
     Raises UnknownDesignError (a KeyError and ValueError) for an unknown
     design, ValueError for bad parameters, FileNotFoundError for a missing
     ``urdf`` file and URDFError for an unreadable one.
     """
-    generated = generate_robot(design, modules, head, **params)
+    from .registration import robot_design
+
+    generated = robot_design(design).describe(modules, head, **params)
     if urdf is None:
         committed = URDF_DIR / f"{generated.design}.urdf"
-        if committed.exists() and committed.read_text(encoding="utf-8") == generated.urdf:
+        if (generated.urdf_path is None and committed.exists()
+                and committed.read_text(encoding="utf-8") == generated.urdf):
             return replace(generated, urdf_path=committed)
         return generated
 
@@ -41,4 +49,13 @@ def load_robot(design: str, modules: int | None = None, head: bool | None = None
     baseline = parse_structure(generated.urdf, f"{generated.design} baseline")
     label = f"{generated.design} ({generated.modules} module{'s' if generated.modules != 1 else ''})"
     check_structure(candidate, baseline, str(path), label)
-    return replace(generated, urdf=text, urdf_path=path.resolve(), source="user")
+    metadata = generated.metadata
+    side = sidecar_path(path)
+    if side is not None:
+        # the user's numbers (screw radius, lead, armature, joint kinds) over the baseline's
+        from snakesim.components.multibody.urdf import parse_urdf
+
+        declared = read_sidecar(side)
+        check_against_urdf(declared, parse_urdf(text, str(path)), str(side))
+        metadata = {**generated.metadata, **declared}
+    return replace(generated, urdf=text, urdf_path=path.resolve(), source="user", metadata=metadata)

@@ -4,9 +4,10 @@ Built from the robot a scene names once, on its multibody: contact components de
 ``robot = Uses(RobotModel)`` and call ``self.robot.derived(screw_layout)``, so the layout
 is built once per robot and its link rows and DOF order are the multibody's by
 construction. The URDF (``robot.tree``) gives each screw joint's parent link, origin,
-axis and ``<mimic>`` relation; the design's metadata sidecar (``robot.metadata["screws"]``,
-from ``snakesim.robots``) gives what URDF cannot: radius, length, lead angle and thread
-hand.
+axis and ``<mimic>`` relation; the robot's metadata (``robot.metadata["screws"]``: a
+snakesim.robots design's, a plugin design's, or the ``NAME.snakesim.yaml`` sidecar beside a
+bare URDF, see snakesim.robots.sidecar) gives what URDF cannot: radius, length, lead angle
+and thread hand, and optionally the screw's link (checked to be its joint's child).
 
 Per screw s (arrays of length ns, in metadata order):
 
@@ -86,9 +87,10 @@ def screw_layout(robot: RobotModel) -> ScrewLayout:
     if "screws" not in meta:
         raise RobotScrewError(
             f"screw contact needs the robot's screw geometry (radius, length, lead angle, hand), which only a "
-            f"snakesim.robots design carries, and {robot.label} has no screw metadata: give 'design' on the "
-            f"multibody (eels-concept, eels-1.0, eels-1.0-front, eels-1.5), with 'urdf' as the path of your URDF "
-            f"of that design if any")
+            f"snakesim.robots design or a metadata sidecar carries, and {robot.label} has no screw metadata: give "
+            f"'design' on the multibody (eels-concept, eels-1.0, eels-1.0-front, eels-1.5), with 'urdf' as the path "
+            f"of your URDF of that design if any, or put a sidecar NAME.snakesim.yaml beside your NAME.urdf "
+            f"declaring its 'screws' (joint, link, hand, lead_angle, radius, length; snakesim.robots.sidecar)")
     screws = meta["screws"] or []
     if not screws:
         raise RobotScrewError(f"design '{robot.design or robot.label}' has no screws (metadata 'screws' is empty): "
@@ -106,6 +108,9 @@ def screw_layout(robot: RobotModel) -> ScrewLayout:
         missing = [k for k in _FIELDS if k not in s]
         if missing:
             raise RobotScrewError(f"metadata screw '{name}' of {robot.label} lacks {', '.join(missing)}")
+        if s.get("link") is not None and s["link"] != j.child:
+            raise RobotScrewError(f"metadata screw '{name}' of {robot.label}: link '{s['link']}' is not the link "
+                                  f"its joint carries ('{j.child}')")
         if s["hand"] not in HANDS:
             raise RobotScrewError(f"screw '{name}': hand {s['hand']!r} is not one of {', '.join(HANDS)}")
         if j.mimic is None:

@@ -376,7 +376,7 @@ class Multibody(Component[MultibodyParams]):
         and each joint's armature with where it came from (the URDF has none: the design or the scene
         adds it)."""
         rep = self.optimisation_report(timing=baseline)
-        rep["armature"] = {j: {"kg_m2": v, "source": src}
+        rep["armature"] = {j: {"kg_m2": v, "source": src, "kind": self.robot.kind_of(j)}
                            for j, (v, src) in joint_values.armature_sources(self.robot, self.p).items()}
         return rep
 

@@ -37,16 +37,21 @@ def armature_sources(robot, p) -> dict[str, tuple[float, str]]:
         raise MultibodyModelError(f"armature_per_effort: unknown joint kind(s) {sorted(unknown)}; "
                                   "kinds: bend, twist, screw, other")
     design = _design_table(robot)
+    declared = robot.metadata.get("joints") or {}
     out = {}
     for name in robot.joints:
-        kind = joint_kind(name)
+        kind = joint_kind(name, robot.metadata)
         if name in explicit:
             out[name] = (explicit[name], "assembly: armature")
+            continue
+        if (declared.get(name) or {}).get("armature") is not None:
+            out[name] = (float(declared[name]["armature"]), "robot metadata: armature")
             continue
         if kind in p.armature_per_effort:
             per, origin = p.armature_per_effort[kind], "assembly: armature_per_effort"
         elif design is not None:
-            per, origin = design[kind], f"design {robot.design}"
+            per, origin = design[kind], (f"design {robot.design}" if robot.design is not None
+                                         else "robot metadata: armature_per_effort")
         else:
             per, origin = ARMATURE_PER_EFFORT[kind], "default for a bare URDF"
         effort = robot.tree.joint_by_name[name].effort
@@ -63,18 +68,23 @@ def armature_sources(robot, p) -> dict[str, tuple[float, str]]:
 
 
 def _design_table(robot) -> dict[str, float] | None:
-    if robot.design is None:
-        return None
-    from snakesim.robots.designs import get_design
+    """Per-kind armature of the robot: a snakesim design's table, or the metadata's
+    ``armature_per_effort`` (a sidecar, a plugin's design) over the bare-URDF defaults."""
+    from snakesim.robots.designs import DESIGNS
 
-    return {**ARMATURE_PER_EFFORT, **get_design(robot.design).armature_per_effort}
+    if robot.design in DESIGNS:
+        return {**ARMATURE_PER_EFFORT, **DESIGNS[robot.design].armature_per_effort}
+    if robot.metadata.get("armature_per_effort"):
+        return {**ARMATURE_PER_EFFORT, **robot.metadata["armature_per_effort"]}
+    return None
 
 
-def armature_lines(sources: dict[str, tuple[float, str]]) -> list[str]:
+def armature_lines(sources: dict[str, tuple[float, str]], kinds: dict[str, str] | None = None) -> list[str]:
     """The armature table of `snakesim check`: one line per (kind, value, source), joints counted."""
     groups: dict[tuple, list[str]] = {}
     for name, (value, origin) in sources.items():
-        groups.setdefault((joint_kind(name), round(value, 12), origin), []).append(name)
+        kind = (kinds or {}).get(name) or joint_kind(name)
+        groups.setdefault((kind, round(value, 12), origin), []).append(name)
     lines = ["  armature (reflected rotor inertia, not in the URDF; set armature / armature_per_effort on the "
              "multibody, or 0 for none):"]
     for (kind, value, origin), names in groups.items():

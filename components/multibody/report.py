@@ -122,7 +122,8 @@ class OptimisationReport(dict):
         lines.append(f"  baseline: {self['baseline']}")
         if self.get("armature"):
             from .joint_values import armature_lines
-            lines += armature_lines({j: (a["kg_m2"], a["source"]) for j, a in self["armature"].items()})
+            lines += armature_lines({j: (a["kg_m2"], a["source"]) for j, a in self["armature"].items()},
+                                    {j: a.get("kind") for j, a in self["armature"].items()})
         return "\n".join(lines)
 
 

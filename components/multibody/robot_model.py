@@ -16,7 +16,10 @@ What it holds (read-only, SI units):
     nq, nv       Pinocchio coordinates with the free-flyer tail; q_names, v_names
     groups       counter-rotating screw pairs (mimic groups)
     metadata     the design's sidecar (screws: radius, length, lead angle, hand; modules;
-                 sensors): what URDF cannot say; {} for a bare URDF
+                 sensors): what URDF cannot say; for a bare URDF the ``NAME.snakesim.yaml``
+                 beside it (snakesim.robots.sidecar: joint kinds, screws, armature), else {}
+    joint_kinds  bend | twist | screw | other per DOF joint: declared by the metadata's
+                 ``joints``, else from the joint's name (the designs' systematic names)
     base_dir     folder that relative mesh file names resolve against
     screw_meshes generated screw meshes not on disk (design variants)
 
@@ -64,8 +67,13 @@ class RobotSource(Params):
         return json.dumps({k: getattr(self, k) for k in RobotSource.model_fields}, sort_keys=True, default=str)
 
 
-def joint_kind(name: str) -> str:
-    """bend | twist | screw | other, from the systematic names of snakesim.robots."""
+def joint_kind(name: str, metadata: dict | None = None) -> str:
+    """bend | twist | screw | other: the kind the robot's metadata declares for joint ``name``
+    (``metadata["joints"][name]["kind"]``, from a sidecar or a registered design), else from the
+    systematic names of snakesim.robots (``bend*``, ``twist*``, ``*screw*``)."""
+    declared = ((metadata or {}).get("joints") or {}).get(name)
+    if declared and declared.get("kind"):
+        return declared["kind"]
     if name.startswith("bend"):
         return "bend"
     if name.startswith("twist"):
@@ -99,7 +107,7 @@ class RobotModel:
         self.nq, self.nv = ref.nq, ref.nv
         q_names, v_names = coordinate_names(ref)
         self.q_names, self.v_names = tuple(q_names), tuple(v_names)
-        self.joint_kinds = tuple(joint_kind(j) for j in self.joints)
+        self.joint_kinds = tuple(joint_kind(j, self.metadata) for j in self.joints)
         self._derived: dict[Any, Any] = {}
 
     # -- building ----------------------------------------------------------------------------
@@ -130,6 +138,10 @@ class RobotModel:
             return self.link_row[link]
         except KeyError:
             raise KeyError(f"no link '{link}' in {self.label}; links: {', '.join(self.links)}") from None
+
+    def kind_of(self, joint: str) -> str:
+        """bend | twist | screw | other of a joint: the metadata's declaration, else its name's prefix."""
+        return joint_kind(joint, self.metadata)
 
     def continuous_mask(self) -> np.ndarray:
         """True for continuous (unbounded, wrapped) joints among the DOF joints."""
@@ -198,8 +210,10 @@ def _load(key: str) -> RobotModel:
             raise MultibodyModelError("'modules', 'head' and 'robot' apply to a 'design'; with a bare 'urdf' "
                                       "leave them out")
         text, label = read_urdf_text(src.urdf)
-        base = Path(src.urdf).resolve().parent if not src.urdf.lstrip().startswith("<") else None
-        return RobotModel(text, label, base_dir=base)
+        is_path = not src.urdf.lstrip().startswith("<")
+        base = Path(src.urdf).resolve().parent if is_path else None
+        metadata = _sidecar_metadata(Path(src.urdf), text, label) if is_path else None
+        return RobotModel(text, label, metadata, base_dir=base)
     from snakesim.robots import load_robot
 
     if src.urdf is not None and src.urdf.lstrip().startswith("<"):
@@ -210,6 +224,23 @@ def _load(key: str) -> RobotModel:
         raise MultibodyModelError(f"robot parameters {sorted(src.robot)}: {e}") from None
     except (KeyError, ValueError, FileNotFoundError) as e:
         raise MultibodyModelError(str(e.args[0]) if e.args else str(e)) from None
-    label = f"{desc.design} ({desc.modules} modules)" + (f" from {desc.urdf_path}" if desc.source == "user" else "")
+    count = f" ({desc.modules} modules)" if desc.modules is not None else ""
+    label = f"{desc.design}{count}" + (f" from {desc.urdf_path}" if desc.source == "user" else "")
     return RobotModel(desc.urdf, label, desc.metadata, desc.base_dir, dict(desc.screw_meshes), desc.design,
                       desc.modules)
+
+
+def _sidecar_metadata(path: Path, text: str, label: str) -> dict | None:
+    """The metadata sidecar beside a bare URDF file (``NAME.snakesim.yaml`` for ``NAME.urdf``), validated
+    and checked against the URDF's names; None without one."""
+    from snakesim.robots.sidecar import RobotMetadataError, check_against_urdf, read_sidecar, sidecar_path
+
+    side = sidecar_path(path)
+    if side is None:
+        return None
+    try:
+        metadata = read_sidecar(side)
+        check_against_urdf(metadata, parse_urdf(text, label), str(side))
+    except RobotMetadataError as e:
+        raise MultibodyModelError(str(e)) from None
+    return metadata

@@ -7,18 +7,22 @@
     image filters  noise, vignetting, gamma, colour: components after a camera       filters.py
 
 Shared pieces: where a sensor sits (mount.py), what it sees (surfaces.py), how rays are
-cast (ray_caster.py: the terrain's and each link's static Embree scene; hit_kernels.py;
-refine_kernels.py: exact hits on tubes and moulins), how surfaces reflect (reflectance.py).
+cast (ray_casting.py: the RayCaster protocol sensors cast into, the back-end registry;
+ray_caster.py: the embree back end, the terrain's and each link's static Embree scene;
+hit_kernels.py; refine_kernels.py: exact hits on tubes and moulins), how surfaces reflect
+(reflectance.py).
 """
 
 from .camera import Camera, CameraFrame, StereoCamera
 from .filters import ColorAdjust, Gamma, ImageFilter, ImageNoise, Vignetting
 from .lidar import Lidar, LidarScan
-from .ray_caster import RayHits, SensorWorld
+from .ray_caster import EmbreeWorld, RayHits, SensorWorld
+from .ray_casting import RayCaster, RayCasterBackend, ray_casters
 from .sensor_scene import SensorScene
 
 #: the components this package registers
 PERCEPTION = (SensorScene, Lidar, Camera, StereoCamera, ImageNoise, Vignetting, Gamma, ColorAdjust)
 
-__all__ = ["PERCEPTION", "Camera", "CameraFrame", "ColorAdjust", "Gamma", "ImageFilter", "ImageNoise", "Lidar",
-           "LidarScan", "RayHits", "SensorScene", "SensorWorld", "StereoCamera", "Vignetting"]
+__all__ = ["PERCEPTION", "Camera", "CameraFrame", "ColorAdjust", "EmbreeWorld", "Gamma", "ImageFilter", "ImageNoise",
+           "Lidar", "LidarScan", "RayCaster", "RayCasterBackend", "RayHits", "SensorScene", "SensorWorld",
+           "StereoCamera", "Vignetting", "ray_casters"]

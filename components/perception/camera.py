@@ -22,7 +22,7 @@ gamma and colour, and an 8-bit sink saturates at 1.
 ``stereo_camera``  a synchronised pair, the right camera ``baseline`` m along the left's
                    optical +x:   out ``left``, ``right``
 
-in   world: SensorWorld (from sensor_scene)
+in   world: RayCaster (from sensor_scene)
 out  CameraFrame (role CAMERA_FRAME) per view, at the component's rate
 uses robot: RobotModel: the mount link
 """
@@ -41,7 +41,8 @@ from snakesim.framework import Component, Input, Output, Params, Uses
 
 from .camera_models import CameraModel, camera_model_from_spec
 from .mount import SensorMount, mount_on, quaternion_xyzw
-from .ray_caster import CastBuffers, RayBundle, SensorWorld, in_chunks, interleaved
+from .ray_caster import CastBuffers, RayBundle, in_chunks, interleaved
+from .ray_casting import RayCaster
 from .hit_kernels import develop
 
 Vec3 = tuple[float, float, float]
@@ -116,7 +117,7 @@ class StereoCameraParams(CameraParams):
 
 class _Camera(Component):
     robot = Uses(RobotModel)
-    world = Input(type=SensorWorld)
+    world = Input(type=RayCaster)
 
     def setup(self):
         p = self.p
@@ -146,13 +147,13 @@ class _Camera(Component):
     def update(self, t, xd, u):
         xd[0] += 1.0
 
-    def pose(self, world: SensorWorld, offset=(0.0, 0.0, 0.0)):
+    def pose(self, world: RayCaster, offset=(0.0, 0.0, 0.0)):
         """(R_wc, p_wc) of the optical frame, moved by ``offset`` m along its own axes."""
         R_wl, p_wl = world.link_pose(self.row)
         R = R_wl @ self.R_ls
         return R, p_wl + R_wl @ self.p_ls + R @ np.asarray(offset, dtype=float)
 
-    def render(self, world: SensorWorld, R: np.ndarray, p_w: np.ndarray, t: float, seq: int,
+    def render(self, world: RayCaster, R: np.ndarray, p_w: np.ndarray, t: float, seq: int,
                frame: str) -> CameraFrame:
         prm, light = self.p, self.p.light
         h, w = prm.height, prm.width

@@ -25,7 +25,7 @@ a curved analytic terrain (tube, moulin) are refined onto its exact surface
 its tessellation (``mesh``: faster, off by up to the mesh's sag; bench/perception.py measures
 both). The beams' hits on the mount link itself are cast once (.ray_caster.RayBundle).
 
-in   world: SensorWorld (from sensor_scene)
+in   world: RayCaster (from sensor_scene)
 out  scan: LidarScan    (role LIDAR_SCAN)
      returns[1]         number of beams with a return (a plottable summary)
 uses robot: RobotModel: the mount link
@@ -48,7 +48,8 @@ from snakesim.framework import Component, Input, Output, Params, Uses
 
 from .beam_patterns import PRESETS, BeamFile, BeamGrid, BeamPattern, BeamRosette
 from .mount import SensorMount, mount_on, quaternion_xyzw
-from .ray_caster import CastBuffers, RayBundle, SensorWorld
+from .ray_caster import CastBuffers, RayBundle
+from .ray_casting import RayCaster
 from .reflectance import lidar_intensity
 
 RETURN, NO_RETURN, TOO_CLOSE, DROPOUT = 0, 1, 2, 3
@@ -114,7 +115,7 @@ class Lidar(Component[LidarParams]):
     type_name = "lidar"
     robot = Uses(RobotModel)
 
-    world = Input(type=SensorWorld)
+    world = Input(type=RayCaster)
     scan = Output(type=LidarScan, feedthrough=True, role=LIDAR_SCAN, doc="this sample's beams")
     returns = Output(shape=(1,), unit="1", feedthrough=True, doc="beams with a return")
 
@@ -160,7 +161,7 @@ class Lidar(Component[LidarParams]):
     def update(self, t, xd, u):
         xd[0] += 1.0
 
-    def sample(self, world: SensorWorld, t: float, seq: int) -> LidarScan:
+    def sample(self, world: RayCaster, t: float, seq: int) -> LidarScan:
         p, pat = self.p, self.pattern
         R_wl, p_wl = world.link_pose(self.row)
         R = R_wl @ self.R_ls

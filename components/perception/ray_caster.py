@@ -1,5 +1,7 @@
 """Ray casting against the physical scene at one instant: Embree (``embreex``) for visibility,
-the terrain's own distance field for the exact hit.
+the terrain's own distance field for the exact hit. This is the ``embree`` back end (``EMBREE``,
+the default of sensor_scene's ``ray_caster``); ``EmbreeWorld`` implements the sensors' port type,
+the ``RayCaster`` protocol (.ray_casting).
 
     hits = world.cast(origins, directions, max_range, min_range=0)
 
@@ -69,6 +71,7 @@ from snakesim.components.multibody.pose_quaternions import rotation_matrices
 
 from .hit_kernels import (bundle_link_rays, finish_hits, link_candidates, link_cones, link_rays, rays_to_world,
                           take_link_hits, take_mount_hits, tighten)
+from .ray_casting import RayCaster, RayCasterBackend
 from .refine_kernels import FourierRefiner
 from .surfaces import RobotSurfaces, TerrainSurfaces, optical_table
 from .textures import apply_textures, texture_table
@@ -424,8 +427,8 @@ def in_chunks(fn, n: int, minimum: int = CHUNK_MIN) -> None:
             f.result()
 
 
-class SensorWorld:
-    """The physical scene at simulated time ``t``: the static terrain and the robot at
+class EmbreeWorld(RayCaster):
+    """The physical scene at simulated time ``t`` (a ``RayCaster``, Embree's): the static terrain and the robot at
     ``link_poses`` (nl, 7) [x, y, z, qx, qy, qz, qw] world. Cheap to create (it keeps the
     poses); rotations and the links' bounding spheres are made on first use and kept for the
     instant."""
@@ -581,3 +584,10 @@ class SensorWorld:
             if len(ids):
                 geom, prim, ng = _intersect(rob.scenes[k], o_l, d_l, far)
                 take_link_hits(ids, geom, far, prim, ng, R_l, rob.face_ids[k], best, src, face, ng_r)
+
+
+#: the name SensorWorld had when it was both the port type and this implementation
+SensorWorld = EmbreeWorld
+
+#: the ``embree`` back end: what sensor_scene builds with it (registered in components/plugin.py)
+EMBREE = RayCasterBackend("embree", terrain=StaticTerrainScene, robot=RobotScenes, world=EmbreeWorld)

@@ -1,11 +1,12 @@
-"""The physical scene the perception sensors see, once per instant (a ``SensorWorld``).
+"""The physical scene the perception sensors see, once per instant (a ``RayCaster``).
 
 Every camera and lidar casts against the output of one ``sensor_scene``: the terrain
 (built into an Embree scene on the first step of a run, kept for the run) and the robot's
 link meshes at the current link poses (one Embree scene per link in its own frame, built on
 the first step and kept: rays are moved into the links' frames, nothing is rebuilt per
 instant; see .ray_caster). Evaluating it when no sensor samples costs a copy of the link
-poses.
+poses. ``ray_caster`` names the back end that builds and casts (``embree``, the default;
+others register through the hook ``snakesim_register_ray_casters``: .ray_casting).
 
     scene: {type: sensor_scene, params: {extent: 30}}
     connections: [terrain.terrain -> scene.terrain, robot.link_poses -> scene.link_poses,
@@ -13,7 +14,7 @@ poses.
 
 in   terrain   Terrain (optional: without it only the robot is visible)
      link_poses[nl, 7]   x, y, z m, qx, qy, qz, qw (world), the multibody's
-out  world     SensorWorld at this instant (feedthrough)
+out  world     RayCaster at this instant (feedthrough)
 uses robot: RobotModel (optional): the link meshes (its URDF visuals)
 """
 
@@ -21,14 +22,14 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import Field
+from pydantic import Field, field_validator
 
 from snakesim.components.multibody.robot_model import RobotModel
 from snakesim.components.port_roles import LINK_POSES
 from snakesim.components.terrain import Terrain
 from snakesim.framework import Component, Input, Output, Params, Uses
 
-from .ray_caster import RobotScenes, SensorWorld, StaticTerrainScene
+from .ray_casting import DEFAULT_RAY_CASTER, RayCaster, ray_caster_backend
 from .surfaces import robot_surfaces, terrain_surfaces
 
 Vec3 = tuple[float, float, float]
@@ -50,6 +51,14 @@ class SensorSceneParams(Params):
                               "EELS 1.0) or its collision shapes (screw envelopes: ~3k faces)")
     robot_albedo: float | None = Field(None, ge=0, le=1, description="albedo of every link (None: the "
                                                                       "mean of each visual's URDF colour)")
+    ray_caster: str = Field(DEFAULT_RAY_CASTER, description="the ray-casting back end (embree, or one a plugin "
+                                                            "registers)")
+
+    @field_validator("ray_caster")
+    @classmethod
+    def _registered(cls, name):
+        ray_caster_backend(name)          # a ValueError naming the registered back ends
+        return name
 
 
 class SensorScene(Component[SensorSceneParams]):
@@ -58,9 +67,10 @@ class SensorScene(Component[SensorSceneParams]):
 
     terrain = Input(type=Terrain, required=False)
     link_poses = Input(shape=lambda c: (c.nl, 7), unit=None, default=0.0, role=LINK_POSES)
-    world = Output(type=SensorWorld, feedthrough=True, doc="the physical scene at this instant")
+    world = Output(type=RayCaster, feedthrough=True, doc="the physical scene at this instant")
 
     def setup(self):
+        self.backend = ray_caster_backend(self.p.ray_caster)
         self.nl = self.robot.nl if self.robot is not None else 0
         self._surfaces = self._robot_scenes = None
         if self.robot is not None and self.p.robot_visible:
@@ -75,15 +85,15 @@ class SensorScene(Component[SensorSceneParams]):
         if terrain is not None and cache.terrain is not terrain:
             p = self.p
             cache.terrain = terrain
-            cache.scene = StaticTerrainScene(terrain_surfaces(terrain, p.center, p.extent, p.cell, p.refine),
-                                             p.refine_limit)
+            cache.scene = self.backend.terrain(terrain_surfaces(terrain, p.center, p.extent, p.cell, p.refine),
+                                               p.refine_limit)
         if self._surfaces is not None and self._robot_scenes is None:
-            self._robot_scenes = RobotScenes(self._surfaces)       # once per component: static
-        y.world = SensorWorld(t, cache.scene, self._robot_scenes, u.link_poses.copy() if self.nl else None)
+            self._robot_scenes = self.backend.robot(self._surfaces)       # once per component: static
+        y.world = self.backend.world(t, cache.scene, self._robot_scenes, u.link_poses.copy() if self.nl else None)
 
 
 class _TerrainCache:
-    """This run's terrain Embree scene (built on the first step, from the terrain object it saw)."""
+    """This run's terrain scene (built by the back end on the first step, from the terrain object it saw)."""
 
     def __init__(self):
         self.terrain = None

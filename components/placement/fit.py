@@ -136,16 +136,16 @@ class _Chord:
         return pts[i] + f * (pts[j] - pts[i]), i
 
 
-def _chain(tree, joints_dof):
+def _chain(tree, joints_dof, metadata=None):
     """Path joints root -> last module, the bend joints on it, and each bend's v_rel (child frame)."""
-    bends = [j for j in joints_dof if joint_kind(j) == "bend"]
+    bends = [j for j in joints_dof if joint_kind(j, metadata) == "bend"]
     if not bends:
-        raise PlacementError("the robot has no bend joints (names 'bend*'): a shape cannot be fitted; "
-                             "use shape kind 'joints'")
+        raise PlacementError("the robot has no bend joints (names 'bend*', or kind bend in its metadata): a shape "
+                             "cannot be fitted; use shape kind 'joints'")
     # the last module: below the last bend, follow the moving non-screw joints (its twist)
     link = tree.joint_by_name[bends[-1]].child
     while True:
-        nxt = [j for j in tree.children.get(link, []) if j.moving and joint_kind(j.name) not in ("screw",)]
+        nxt = [j for j in tree.children.get(link, []) if j.moving and joint_kind(j.name, metadata) not in ("screw",)]
         if not nxt:
             break
         link = nxt[0].child
@@ -155,7 +155,7 @@ def _chain(tree, joints_dof):
         path.append(j)
         lk = j.parent
     path.reverse()
-    on_path = [j.name for j in path if joint_kind(j.name) == "bend"]
+    on_path = [j.name for j in path if joint_kind(j.name, metadata) == "bend"]
     v_rel = {}
     for a, b in zip(on_path, on_path[1:]):
         v_rel[a] = tree.placement_in(tree.joint_by_name[a].child, tree.joint_by_name[b].child)[1]
@@ -192,7 +192,7 @@ def fit_shape(robot: RobotModel, shape: Shape | dict, limits: dict[str, float] |
         q0.update({k: float(v) for k, v in match_values(names, q, "shape.q").items()})
         return Placement(q0, tuple(P0), _quat_xyzw(R_pose), P0[None, :], 0.0, ())
 
-    path, bends, v_rel, (R_b0, p_b0) = _chain(tree, names)
+    path, bends, v_rel, (R_b0, p_b0) = _chain(tree, names, robot.metadata)
     length = float(np.linalg.norm(p_b0) + sum(np.linalg.norm(v) for v in v_rel.values()))
     pts = world_curve(shape, 3.0 * length + 1.0)
     chord = _Chord(pts, f"shape '{shape.kind}'")
@@ -200,7 +200,7 @@ def fit_shape(robot: RobotModel, shape: Shape | dict, limits: dict[str, float] |
     clipped = []
 
     def clip(name, a):
-        m = lim.get(joint_kind(name), math.inf)
+        m = lim.get(joint_kind(name, robot.metadata), math.inf)
         if abs(a) > m:
             clipped.append(name)
             return math.copysign(m, a)
@@ -228,7 +228,7 @@ def fit_shape(robot: RobotModel, shape: Shape | dict, limits: dict[str, float] |
 
     for idx, j in enumerate(path):
         Rj, pj = R @ j.rotation, p + R @ j.translation
-        kind = joint_kind(j.name)
+        kind = joint_kind(j.name, robot.metadata)
         a = 0.0
         if kind == "bend" and j.name in v_rel:
             L = float(np.linalg.norm(v_rel[j.name]))

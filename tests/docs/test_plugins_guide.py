@@ -13,6 +13,11 @@ page prints.
 The page's second package, a terrain kind (blocks titled ``terrain-plugin/FILE``), is installed the
 same way; its tests run, and the installed ``snakesim`` runs its scene: the contact carries the
 robot's weight, every lidar return lies on the kind's surface, the viewer's recording holds its mesh.
+
+The third, a robot design (blocks titled ``design-plugin/FILE``), likewise: its tests run, and the
+installed ``snakesim`` runs its scene (the design on flat ice, named by ``design:`` with no file of
+snakesim edited): the screw contact, reading the screws from the design's metadata, carries the
+URDF's mass times g; ``snakesim robot urdf`` writes the design with its metadata sidecar.
 """
 
 from __future__ import annotations
@@ -32,6 +37,8 @@ from doc_blocks import assembled_files
 PLUGIN = Path(__file__).resolve().parents[2] / "tests" / "plugin_pkg"
 #: the page's terrain-kind package: its blocks' titles start with this
 TERRAIN = "terrain-plugin/"
+#: the page's robot-design package
+DESIGN = "design-plugin/"
 #: files of tests/plugin_pkg the page need not print
 NOT_PRINTED = {"README.md"}
 
@@ -51,7 +58,7 @@ def _run(cmd, cwd, env, timeout=300) -> str:
 
 
 def _component_plugin_files() -> dict[str, str]:
-    return {k: v for k, v in assembled_files("plugins.md").items() if not k.startswith(TERRAIN)}
+    return {k: v for k, v in assembled_files("plugins.md").items() if not k.startswith((TERRAIN, DESIGN))}
 
 
 def test_the_page_prints_the_demo_plugin_whole():
@@ -156,3 +163,34 @@ def test_the_printed_terrain_kind_installs_and_every_consumer_sees_it(tmp_path):
     assert len(p) > 500
     np.testing.assert_allclose(distance(p), 0.0, atol=1e-4)            # rerun stores float32
     assert (np.linalg.norm(p - center, axis=1) - radius < p[:, 2] - 1e-3).sum() > 20     # some on the dome
+
+
+def test_the_printed_robot_design_installs_and_runs_in_a_scene(tmp_path):
+    import xml.etree.ElementTree as ET
+
+    from snakesim.components.multibody.robot_model import RobotModel
+
+    files = {k[len(DESIGN):]: v for k, v in assembled_files("plugins.md").items() if k.startswith(DESIGN)}
+    assert {"pyproject.toml", "src/snakesim_demo_design/design.py", "tests/test_demo_auger_snake.py",
+            "src/snakesim_demo_design/assemblies/auger-snake-ice.yaml"} <= set(files)
+    site, env, snakesim, work = _install_and_test(files, tmp_path, "design-plugin")
+    assert (site / "snakesim_demo_design" / "design.py").is_file()
+
+    # installed: the scene's robot is the plugin's design, with no file of snakesim edited
+    _run([*snakesim, "run", "auger-snake-ice", "--quiet", "--out", "runs/auger"], work, env)
+    with open(work / "runs" / "auger" / "signals.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    assert float(rows[-1]["t"]) == pytest.approx(0.5)
+
+    # its URDF and sidecar, written by the installed command, load without the plugin
+    _run([*snakesim, "robot", "urdf", "--robot", "demo-auger-snake", "--modules", "3", "-o", "snake.urdf"], work, env)
+    assert (work / "snake.snakesim.yaml").is_file()
+    robot = RobotModel.load(urdf=str(work / "snake.urdf"))
+    assert robot.joint_kinds == ("screw", "bend", "screw", "bend", "screw")
+
+    # the screw contact, reading the augers from the metadata, carries the URDF's mass times g
+    mass = sum(float(m.get("value")) for m in ET.fromstring(robot.urdf).iter("mass"))
+    assert mass == pytest.approx(7.5)
+    assert float(rows[-1]["contact.normal_force[0]"]) == pytest.approx(9.81 * mass, rel=1e-3)
+    for i in range(3):                                  # each module on its own auger
+        assert float(rows[-1][f"contact.screw_normal_force.drive_{i}"]) == pytest.approx(9.81 * mass / 3, rel=1e-3)
