@@ -44,8 +44,8 @@ import click  # noqa: E402
 import numpy as np  # noqa: E402
 import pinocchio as pin  # noqa: E402
 
-from snakesim.components.contact.sdf_kernels import (SdfPorts, SdfWork, Surface, plane_extremal_step,  # noqa: E402
-                                                      plane_step)
+from snakesim.components.contact.plane_kernels import plane_extremal_step, plane_step  # noqa: E402
+from snakesim.components.contact.screw_contact_kernels import SdfPorts, SdfWork, Surface  # noqa: E402
 from snakesim.components.control.pid_kernel import PidRun, pid_step  # noqa: E402
 from snakesim.components.kernel_args import bind  # noqa: E402
 from snakesim.components.multibody.kernels import Kin, Ports, force_step, state_step  # noqa: E402

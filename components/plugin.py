@@ -89,7 +89,7 @@ def snakesim_register_components(registry):
 @hookimpl
 def snakesim_register_terrain_kinds(registry):
     # the kinds terrain YAML can name: plane, tube, parallel_walls, u_channel, moulin, dem, obstacles, mesh
-    from .terrain.spec import builtin_terrain_kinds
+    from .terrain.builtin_kinds import builtin_terrain_kinds
 
     for kind in builtin_terrain_kinds():
         registry.add_terrain_kind(kind)

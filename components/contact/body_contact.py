@@ -74,7 +74,7 @@ from .body_kernels import (BodyPorts, BodyTable, BodyWork, body_centres_step, bo
 from .body_samples import BodySampleOptions, body_samples
 from .contact_set import ContactSet
 from .kernels import EV_FLOOR, MODES
-from .sdf_kernels import Surface
+from .screw_contact_kernels import Surface
 
 
 class Skin(Params):

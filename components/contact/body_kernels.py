@@ -1,7 +1,7 @@
 """numba kernels of the body contact step (body_contact.py): per-piece broad phase, sample
 kinematics, forces reduced to link wrenches. All write into preallocated arrays.
 
-Frames as in sdf_kernels.py: link_poses rows [x, y, z, qx, qy, qz, qw] (world),
+Frames as in screw_contact_kernels.py: link_poses rows [x, y, z, qx, qy, qz, qw] (world),
 link_velocities rows [v of the link origin, ω] (world axes); sample tables in the link
 frame. The sample placement (sample_points), the plane query and broad phase (plane_query,
 plane_active) and the one contact law (kernels_numba.point_contact_force) are the screw
@@ -16,15 +16,15 @@ and μ_across across it.
 
 from __future__ import annotations
 
-import numpy as np
 from numba import njit
 
 from ..kernel_args import record
+from ..kernel_reductions import np_sum, same_bits
+from ..materials import MU, C, K
 from .kernels_numba import add_wrench, point_contact_force
 from ..multibody.pose_quaternions import pose_rotation
-from .sdf_kernels import link_fixed_points, np_sum, plane_active, plane_query, sample_points
-
-K, C, MU = 0, 1, 2
+from .plane_kernels import plane_active, plane_query
+from .point_kernels import link_fixed_points, sample_points, world_axis
 
 
 @njit(cache=True)
@@ -58,9 +58,7 @@ def body_contact_wrenches(m, distance, normal, material, sample, owner, poses, v
         vy = vels[b, 1] + (wz * rx - wx * rz)
         vz = vels[b, 2] + (wx * ry - wy * rx)
         out_vel[i, 0], out_vel[i, 1], out_vel[i, 2] = vx, vy, vz
-        ax = R[0, 0] * axis_B[q, 0] + R[0, 1] * axis_B[q, 1] + R[0, 2] * axis_B[q, 2]
-        ay = R[1, 0] * axis_B[q, 0] + R[1, 1] * axis_B[q, 1] + R[1, 2] * axis_B[q, 2]
-        az = R[2, 0] * axis_B[q, 0] + R[2, 1] * axis_B[q, 1] + R[2, 2] * axis_B[q, 2]
+        ax, ay, az = world_axis(R, axis_B, q)
         mat = material[i]
         fn, fx, fy, fz = point_contact_force(
             d, normal[i, 0], normal[i, 1], normal[i, 2], vx, vy, vz, ax, ay, az, mats[mat, K], mats[mat, C],
@@ -76,7 +74,7 @@ def body_contact_wrenches(m, distance, normal, material, sample, owner, poses, v
 #   table    BodyTable   the sample tables and friction parameters (built once per component)
 #   work     BodyWork    this run's per-sample scratch and counters, and what the last evaluation saw
 #   ports    BodyPorts   this run's input views and output buffers (or scratch outputs)
-#   surface  sdf_kernels.Surface   per terrain object: material table; a plane's origin, normal, material
+#   surface  screw_contact_kernels.Surface   per terrain object: material table; a plane's origin, normal, material
 # work.counts: [evaluations, pieces tested, samples queried, active pieces, samples m of the last evaluation]
 
 BodyTable = record("BodyTable", ("broad_phase", "piece_link", "centre_B", "piece_r", "start", "points_B", "axis_B",
@@ -158,14 +156,4 @@ def body_wrench_step(table, work, ports, surface):
 @njit(cache=True)
 def body_seen_step(work, ports):
     """True if the last evaluation saw exactly these inputs (bit for bit)."""
-    return _same(work.seen_poses, ports.poses) and _same(work.seen_vels, ports.vels)
-
-
-@njit(cache=True)
-def _same(a, b):
-    x, y = a.ravel().view(np.uint64), b.ravel().view(np.uint64)
-    for i in range(x.size):
-        if x[i] != y[i]:
-            return False
-    return True
-
+    return same_bits(work.seen_poses, ports.poses) and same_bits(work.seen_vels, ports.vels)

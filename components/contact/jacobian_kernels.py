@@ -27,9 +27,9 @@ import math
 import numpy as np
 from numba import njit
 
+from ..materials import EV_A, EV_B, MU, C, K
 from ..multibody.pose_quaternions import pose_rotation
-
-K, C, MU, EV_A, EV_B = range(5)
+from .point_kernels import world_axis
 
 
 @njit(cache=True)
@@ -207,9 +207,7 @@ def contact_jacobian_blocks(m, distance, normal, material, owner, point, vel, po
             b = parent_row[s]
             o = screw_row[s]
             pose_rotation(poses, b, R)
-            a0 = R[0, 0] * axis_B[s, 0] + R[0, 1] * axis_B[s, 1] + R[0, 2] * axis_B[s, 2]
-            a1 = R[1, 0] * axis_B[s, 0] + R[1, 1] * axis_B[s, 1] + R[1, 2] * axis_B[s, 2]
-            a2 = R[2, 0] * axis_B[s, 0] + R[2, 1] * axis_B[s, 1] + R[2, 2] * axis_B[s, 2]
+            a0, a1, a2 = world_axis(R, axis_B, s)
             cl, sl = math.cos(lead_angle[s]), hand[s] * math.sin(lead_angle[s])
         for j in range(3):
             nrm[j] = normal[i, j]

@@ -6,7 +6,7 @@ fixed in the screw's PARENT body, so they do not depend on the spin angle. A sam
 with terrain signed distance φ(p) < 0 is a contact of depth d = −φ, outward normal n̂
 and the terrain material there. The envelope is a surface of revolution, so the contact
 acts where the envelope faces the terrain in the sample's ring (centre c_ring, axis â):
-ê_c = unit(−n̂ + (n̂·â)â), p_c = c_ring + r ê_c. There (sdf_kernels.contact_wrenches):
+ê_c = unit(−n̂ + (n̂·â)â), p_c = c_ring + r ê_c. There (screw_contact_kernels.contact_wrenches):
 
     slip       v = v_B + ω_B × (p_c − o_B) + ω_s r â × ê_c      (world; ω_s the screw spin:
                the screw DOF's rate, −rate for the mimic rear screw of a pair)
@@ -90,13 +90,15 @@ from snakesim.components.multibody.linearization import LinkWrenchJacobian
 from snakesim.components.multibody.robot_model import RobotModel
 
 from ..kernel_args import bind
+from ..kernel_reductions import least_distance
 from ..terrain.base import Terrain
 from .contact_set import ContactSet
 from .kernels import EV_FLOOR, MODES
 from .robot_screws import screw_layout
 from .screw_samples import ScrewContactSamples
-from .sdf_kernels import (Samples, SdfPorts, SdfWork, Surface, centres_step, jacobian_step, least_distance,
-                          plane_extremal_step, plane_step, ring_extremal_step, ring_finish_step, ring_sample_step,
+from .plane_kernels import plane_extremal_step, plane_step
+from .screw_contact_kernels import Samples, SdfPorts, SdfWork, Surface
+from .sdf_kernels import (centres_step, jacobian_step, ring_extremal_step, ring_finish_step, ring_sample_step,
                           sample_step, seen_step, wrench_step)
 
 

@@ -5,7 +5,7 @@ A kind is one registration (:class:`TerrainKind`), made through the plugin hook
 
     name      the ``kind:`` value (third-party kinds carry their package's prefix)
     spec      the pydantic model of its YAML mapping: a ``kind: Literal[name]`` field plus the kind's
-              own keys; subclass ``KindSpec`` (terrain/spec.py) for ``description``, ``materials``
+              own keys; subclass ``KindSpec`` (terrain/spec_models.py) for ``description``, ``materials``
               and ``regions``
     terrain   the Terrain class it builds (its ``regions`` name what ``regions:`` may map)
     build     ``build(spec, context, **kw) -> Terrain``: ``kw`` holds ``materials``, ``region_material``
