@@ -93,67 +93,51 @@ class Registry:
         """A ``TerrainKind`` (snakesim.components.terrain.kinds): its ``name`` is the ``kind:`` value."""
         from snakesim.components.terrain.kinds import TerrainKind
 
-        if not isinstance(kind, TerrainKind):
-            raise RegistryError(f"{kind!r} is not a snakesim TerrainKind")
-        name = kind.name
-        if f"terrain kind:{name}" in self.clashes:
-            self.clashes[f"terrain kind:{name}"].append(f"{self.current_plugin}: {kind.terrain.__module__}."
-                                                       f"{kind.terrain.__qualname__}")
-            return
-        if name in self.terrain_kinds and self.terrain_kinds[name] is not kind:
-            old = self.terrain_kinds[name]
-            first = f"{self.origins.get(f'terrain kind:{name}', '?')}: {old.terrain.__module__}.{old.terrain.__qualname__}"
-            second = f"{self.current_plugin or '?'}: {kind.terrain.__module__}.{kind.terrain.__qualname__}"
-            if self.current_plugin is None:
-                raise RegistryError(f"terrain kind '{name}' registered twice: {first} and {second}")
-            self.clashes[f"terrain kind:{name}"] = [first, second]
-            del self.terrain_kinds[name]
-            return
-        self.terrain_kinds[name] = kind
-        self.origins[f"terrain kind:{name}"] = self.current_plugin or "?"
+        self._add_named(self.terrain_kinds, "terrain kind", kind, TerrainKind,
+                        lambda k: f"{k.terrain.__module__}.{k.terrain.__qualname__}")
 
     def add_robot_design(self, design) -> None:
         """A ``RobotDesign`` (snakesim.robots.registration): its ``name`` is the multibody's ``design:``."""
         from snakesim.robots.registration import RobotDesign
 
-        if not isinstance(design, RobotDesign):
-            raise RegistryError(f"{design!r} is not a snakesim RobotDesign")
-        name, key = design.name, f"robot design:{design.name}"
-        where = f"{self.current_plugin or '?'}: {getattr(design.build, '__module__', '?')}"
-        if key in self.clashes:
-            self.clashes[key].append(where)
-            return
-        if name in self.robot_designs and self.robot_designs[name] is not design:
-            first = f"{self.origins.get(key, '?')}: {getattr(self.robot_designs[name].build, '__module__', '?')}"
-            if self.current_plugin is None:
-                raise RegistryError(f"robot design '{name}' registered twice: {first} and {where}")
-            self.clashes[key] = [first, where]
-            del self.robot_designs[name]
-            return
-        self.robot_designs[name] = design
-        self.origins[key] = self.current_plugin or "?"
+        self._add_named(self.robot_designs, "robot design", design, RobotDesign,
+                        lambda d: getattr(d.build, "__module__", "?"))
 
     def add_ray_caster(self, backend) -> None:
         """A ``RayCasterBackend`` (snakesim.components.perception.ray_casting): its ``name`` is the value
         of sensor_scene's ``ray_caster``."""
         from snakesim.components.perception.ray_casting import RayCasterBackend
 
-        if not isinstance(backend, RayCasterBackend):
-            raise RegistryError(f"{backend!r} is not a snakesim RayCasterBackend")
-        name, key = backend.name, f"ray caster:{backend.name}"
-        where = f"{self.current_plugin or '?'}: {getattr(backend.world, '__module__', '?')}"
+        self._add_named(self.ray_casters, "ray caster", backend, RayCasterBackend,
+                        lambda b: getattr(b.world, "__module__", "?"))
+
+    def _add_named(self, table: dict, label: str, item, cls: type, source) -> None:
+        """Register ``item`` (an instance of ``cls``) under ``item.name`` in ``table``. Two plugins giving one
+        name leave neither (the name raises where used, naming both: :meth:`_clashed`); outside a plugin's
+        registration a second one is an error at once. ``source(item)`` says where an item comes from."""
+        if not isinstance(item, cls):
+            raise RegistryError(f"{item!r} is not a snakesim {cls.__name__}")
+        name, key = item.name, f"{label}:{item.name}"
+        where = f"{self.current_plugin or '?'}: {source(item)}"
         if key in self.clashes:
             self.clashes[key].append(where)
             return
-        if name in self.ray_casters and self.ray_casters[name] is not backend:
-            first = f"{self.origins.get(key, '?')}: {getattr(self.ray_casters[name].world, '__module__', '?')}"
+        if name in table and table[name] is not item:
+            first = f"{self.origins.get(key, '?')}: {source(table[name])}"
             if self.current_plugin is None:
-                raise RegistryError(f"ray caster '{name}' registered twice: {first} and {where}")
+                raise RegistryError(f"{label} '{name}' registered twice: {first} and {where}")
             self.clashes[key] = [first, where]
-            del self.ray_casters[name]
+            del table[name]
             return
-        self.ray_casters[name] = backend
+        table[name] = item
         self.origins[key] = self.current_plugin or "?"
+
+    def builtins_first(self, table: dict, label: str) -> dict:
+        """``table`` (name -> registered item) with the built-in plugins' entries first, in registration
+        order (the order error messages list them in)."""
+        builtin = builtin_plugin_names()
+        first = [n for n in table if self.origins.get(f"{label}:{n}") in builtin]
+        return {n: table[n] for n in first + [n for n in table if n not in first]}
 
     def _clashed(self, kind: str, name: str) -> None:
         both = self.clashes.get(f"{kind}:{name}")
@@ -286,34 +270,29 @@ def build_registry(load_entry_points: bool = True) -> Registry:
     return reg
 
 
-@lru_cache(maxsize=1)
-def default_robot_designs() -> Registry:
-    """A registry holding only the robot designs (built-ins plus installed plugins): what building a robot
-    reads, without importing every component. Clashing names raise where used (``robot_design``)."""
+def _only(hook_name: str) -> Registry:
+    """A registry holding only what one registration hook gives (built-ins plus installed plugins): what
+    terrain loading, robot building and sensor_scene read, without importing every component. Clashing
+    names raise where used."""
     pm = make_plugin_manager()
     reg = Registry(pm)
-    _register_each(pm, "snakesim_register_robot_designs", reg)
+    _register_each(pm, hook_name, reg)
     return reg
+
+
+@lru_cache(maxsize=1)
+def default_robot_designs() -> Registry:
+    return _only("snakesim_register_robot_designs")
 
 
 @lru_cache(maxsize=1)
 def default_terrain_kinds() -> Registry:
-    """A registry holding only the terrain kinds (built-ins plus installed plugins): what terrain loading
-    reads, without importing every component. Clashing names raise where used (``terrain_kind``)."""
-    pm = make_plugin_manager()
-    reg = Registry(pm)
-    _register_each(pm, "snakesim_register_terrain_kinds", reg)
-    return reg
+    return _only("snakesim_register_terrain_kinds")
 
 
 @lru_cache(maxsize=1)
 def default_ray_casters() -> Registry:
-    """A registry holding only the ray-casting back ends (built-ins plus installed plugins): what
-    sensor_scene's ``ray_caster`` is checked against. Clashing names raise where used."""
-    pm = make_plugin_manager()
-    reg = Registry(pm)
-    _register_each(pm, "snakesim_register_ray_casters", reg)
-    return reg
+    return _only("snakesim_register_ray_casters")
 
 
 @lru_cache(maxsize=1)

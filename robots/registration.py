@@ -92,14 +92,10 @@ def builtin_robot_designs() -> tuple[RobotDesign, ...]:
 
 def robot_designs(registry=None) -> dict[str, RobotDesign]:
     """name -> RobotDesign of ``registry`` (default: built-ins plus every installed plugin), built-ins first."""
-    from snakesim.framework.registry import builtin_plugin_names, default_robot_designs
+    from snakesim.framework.registry import default_robot_designs
 
-    if registry is None:
-        registry = default_robot_designs()
-    builtin = builtin_plugin_names()
-    designs = registry.robot_designs
-    first = [n for n in designs if registry.origins.get(f"robot design:{n}") in builtin]
-    return {n: designs[n] for n in first + [n for n in designs if n not in first]}
+    reg = registry or default_robot_designs()
+    return reg.builtins_first(reg.robot_designs, "robot design")
 
 
 def robot_design(name: str, registry=None) -> RobotDesign:

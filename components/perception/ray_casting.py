@@ -80,14 +80,10 @@ class RayCasterBackend:
 def ray_casters(registry=None) -> dict[str, RayCasterBackend]:
     """name -> RayCasterBackend of ``registry`` (default: built-ins plus every installed plugin),
     the built-in back ends first."""
-    from snakesim.framework.registry import builtin_plugin_names, default_ray_casters
+    from snakesim.framework.registry import default_ray_casters
 
-    if registry is None:
-        registry = default_ray_casters()
-    builtin = builtin_plugin_names()
-    backends = registry.ray_casters
-    first = [n for n in backends if registry.origins.get(f"ray caster:{n}") in builtin]
-    return {n: backends[n] for n in first + [n for n in backends if n not in first]}
+    reg = registry or default_ray_casters()
+    return reg.builtins_first(reg.ray_casters, "ray caster")
 
 
 def ray_caster_backend(name: str, registry=None) -> RayCasterBackend:

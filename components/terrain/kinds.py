@@ -61,14 +61,10 @@ class TerrainKind:
 def terrain_kinds(registry=None) -> dict[str, TerrainKind]:
     """name -> TerrainKind of ``registry`` (default: built-ins plus every installed plugin), the
     built-in kinds first (the order error messages list them in)."""
-    from snakesim.framework.registry import builtin_plugin_names, default_terrain_kinds
+    from snakesim.framework.registry import default_terrain_kinds
 
-    if registry is None:
-        registry = default_terrain_kinds()
-    builtin = builtin_plugin_names()
-    kinds = registry.terrain_kinds
-    first = [n for n in kinds if registry.origins.get(f"terrain kind:{n}") in builtin]
-    return {n: kinds[n] for n in first + [n for n in kinds if n not in first]}
+    reg = registry or default_terrain_kinds()
+    return reg.builtins_first(reg.terrain_kinds, "terrain kind")
 
 
 def terrain_kind(name: str, registry=None) -> TerrainKind | None:
