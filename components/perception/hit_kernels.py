@@ -167,6 +167,16 @@ def _box_entry(s, v, t1, box_lo, box_hi):
     return t0 if t0 <= t1 else -1.0
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _bin_meets_cone(b, k, bin_axis, bin_cos, bin_sin, u, cos_a, sin_a):
+    """Whether bin b's cone of rays (axis, half-angle β as cos/sin) overlaps link k's cone (axis u_k,
+    half-angle α as cos/sin): the angle between the axes is below α + β, or α + β passes π (wide)."""
+    c_ab = bin_axis[b, 0] * u[k, 0] + bin_axis[b, 1] * u[k, 1] + bin_axis[b, 2] * u[k, 2]
+    lim = cos_a[k] * bin_cos[b] - sin_a[k] * bin_sin[b]
+    wide = sin_a[k] * bin_cos[b] + cos_a[k] * bin_sin[b] < 0.0
+    return wide or not c_ab < lim         # (not <: a NaN axis keeps the bin, as it always did)
+
+
 @njit(cache=True, nogil=True)
 def bundle_link_rays(o_b, d_b, bin_first, bin_rays, bin_axis, bin_cos, bin_sin, u, cos_a, sin_a, links, M, c,
                      min_range, reach, box_lo, box_hi):
@@ -187,13 +197,8 @@ def bundle_link_rays(o_b, d_b, bin_first, bin_rays, bin_axis, bin_cos, bin_sin, 
         if cos_a[k] <= 1.0:
             every = cos_a[k] <= -1.0
             for b in range(B):
-                if not every:
-                    c_ab = bin_axis[b, 0] * u[k, 0] + bin_axis[b, 1] * u[k, 1] + bin_axis[b, 2] * u[k, 2]
-                    lim = cos_a[k] * bin_cos[b] - sin_a[k] * bin_sin[b]
-                    wide = sin_a[k] * bin_cos[b] + cos_a[k] * bin_sin[b] < 0.0
-                    if not wide and c_ab < lim:
-                        continue
-                m += bin_first[b + 1] - bin_first[b]
+                if every or _bin_meets_cone(b, k, bin_axis, bin_cos, bin_sin, u, cos_a, sin_a):
+                    m += bin_first[b + 1] - bin_first[b]
         offsets[j + 1] = offsets[j] + m
     N = offsets[J]
     ids, entry = np.empty(N, dtype=np.int64), np.empty(N, dtype=np.float32)
@@ -207,12 +212,8 @@ def bundle_link_rays(o_b, d_b, bin_first, bin_rays, bin_axis, bin_cos, bin_sin, 
         every = cos_a[k] <= -1.0
         n = offsets[j]
         for b in range(B):
-            if not every:
-                c_ab = bin_axis[b, 0] * u[k, 0] + bin_axis[b, 1] * u[k, 1] + bin_axis[b, 2] * u[k, 2]
-                lim = cos_a[k] * bin_cos[b] - sin_a[k] * bin_sin[b]
-                wide = sin_a[k] * bin_cos[b] + cos_a[k] * bin_sin[b] < 0.0
-                if not wide and c_ab < lim:
-                    continue
+            if not (every or _bin_meets_cone(b, k, bin_axis, bin_cos, bin_sin, u, cos_a, sin_a)):
+                continue
             for q in range(bin_first[b], bin_first[b + 1]):
                 dx, dy, dz = d_b[q, 0], d_b[q, 1], d_b[q, 2]
                 if not every and dx * u[k, 0] + dy * u[k, 1] + dz * u[k, 2] < cos_a[k]:

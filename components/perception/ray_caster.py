@@ -7,7 +7,8 @@ the ``RayCaster`` protocol (.ray_casting).
 
 origins (n, 3) m and unit directions (n, 3), world frame (``cast_from`` takes them in a
 sensor frame and its pose). Nothing is built per instant: the terrain is one Embree scene
-built once per run (``StaticTerrainScene``), and each robot link's mesh is its own Embree
+built once per run (``StaticTerrainScene``; again when a deformable terrain's state changes,
+sensor_scene), and each robot link's mesh is its own Embree
 scene in its link frame, built once per robot (``RobotScenes``). A ray is cast against the
 terrain first (one Embree call for all rays); then against each link it can meet, in its
 link frame, o_l = Rᵀ(o − p), d_l = Rᵀd (a rigid motion keeps the distance t), with far = the

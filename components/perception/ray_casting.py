@@ -10,7 +10,8 @@ A back end (:class:`RayCasterBackend`) is registered by name through the plugin 
 ``sensor_scene``'s parameter ``ray_caster`` (default ``embree``: .ray_caster). It gets the same
 triangles every back end gets (.surfaces: ``TerrainSurfaces``, ``RobotSurfaces``) and builds:
 
-    terrain(surfaces, refine_limit)   the terrain's static scene, once per terrain object and run
+    terrain(surfaces, refine_limit)   the terrain's static scene, once per terrain object and run, and
+                                      again when its state changes (``state.version``: a deformable kind)
     robot(surfaces)                   the robot links' static scenes (link frames), once per sensor_scene
     world(t, terrain, robot, link_poses)   the RayCaster of one instant (either scene may be None:
                                       no terrain, robot not visible; link_poses (nl, 7) or None)

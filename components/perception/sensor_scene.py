@@ -1,7 +1,8 @@
 """The physical scene the perception sensors see, once per instant (a ``RayCaster``).
 
 Every camera and lidar casts against the output of one ``sensor_scene``: the terrain
-(built into an Embree scene on the first step of a run, kept for the run) and the robot's
+(built into an Embree scene on the first step of a run, kept for the run and built again when
+the terrain's state changes: a deformable kind's ``state.version``, terrain/derived.py) and the robot's
 link meshes at the current link poses (one Embree scene per link in its own frame, built on
 the first step and kept: rays are moved into the links' frames, nothing is rebuilt per
 instant; see .ray_caster). Evaluating it when no sensor samples costs a copy of the link
@@ -26,7 +27,7 @@ from pydantic import Field, field_validator
 
 from snakesim.components.multibody.robot_model import RobotModel
 from snakesim.components.port_roles import LINK_POSES
-from snakesim.components.terrain import Terrain
+from snakesim.components.terrain import Terrain, TerrainDerived
 from snakesim.framework import Component, Input, Output, Params, Uses
 
 from .ray_casting import DEFAULT_RAY_CASTER, RayCaster, ray_caster_backend
@@ -77,24 +78,17 @@ class SensorScene(Component[SensorSceneParams]):
             self._surfaces = robot_surfaces(self.robot, self.p.robot_albedo, self.p.robot_geometry)
 
     def make_cache(self, x, u, y):
-        return _TerrainCache()
+        """This run's terrain scene: built by the back end on the first step, again when the terrain's
+        state changes (a deformable kind: terrain/derived.py), never for a static kind."""
+        return TerrainDerived(self._terrain_scene)
+
+    def _terrain_scene(self, terrain: Terrain):
+        p = self.p
+        return self.backend.terrain(terrain_surfaces(terrain, p.center, p.extent, p.cell, p.refine), p.refine_limit)
 
     def output(self, t, x, u, y):
-        cache = u.cache
         terrain = u.terrain
-        if terrain is not None and cache.terrain is not terrain:
-            p = self.p
-            cache.terrain = terrain
-            cache.scene = self.backend.terrain(terrain_surfaces(terrain, p.center, p.extent, p.cell, p.refine),
-                                               p.refine_limit)
+        scene = u.cache.get(terrain) if terrain is not None else None
         if self._surfaces is not None and self._robot_scenes is None:
             self._robot_scenes = self.backend.robot(self._surfaces)       # once per component: static
-        y.world = self.backend.world(t, cache.scene, self._robot_scenes, u.link_poses.copy() if self.nl else None)
-
-
-class _TerrainCache:
-    """This run's terrain scene (built by the back end on the first step, from the terrain object it saw)."""
-
-    def __init__(self):
-        self.terrain = None
-        self.scene = None
+        y.world = self.backend.world(t, scene, self._robot_scenes, u.link_poses.copy() if self.nl else None)

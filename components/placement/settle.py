@@ -102,6 +102,7 @@ from ..contact.robot_screws import screw_layout
 from ..contact.screw_samples import ScrewContactSamples
 from ..multibody.robot_model import RobotModel
 from ..terrain.base import Terrain
+from ..terrain.derived import TerrainDerived
 
 
 #: relative lever arm below which a wall-force moment direction is not imposed on the pre-load (see
@@ -322,7 +323,7 @@ class Settle(Component[SettleParams]):
         phi, n, pts, rows = nearest = self._nearest(u.link_poses, terrain)
         if "attraction" in self.used_outputs:        # for calc_attraction at the same inputs
             c = u.cache
-            c.terrain, c.nearest = terrain, nearest
+            c.nearest.keep(terrain, nearest)
             np.copyto(c.poses, u.link_poses)
         y.gap[:] = phi
         y.max_speed[0] = self._speed(u.link_velocities)
@@ -359,9 +360,10 @@ class Settle(Component[SettleParams]):
             y.attraction = AttractionSet.empty()
             return
         c = u.cache
-        nearest = c.nearest
-        if c.terrain is not u.terrain or not np.array_equal(c.poses, u.link_poses):
-            nearest = self._nearest(u.link_poses, u.terrain)          # output() saw other inputs
+        nearest = c.nearest.value
+        # output() saw other inputs: another terrain, its state changed since, or other poses
+        if c.nearest.stale(u.terrain) or not np.array_equal(c.poses, u.link_poses):
+            nearest = self._nearest(u.link_poses, u.terrain)
         phi, n, pts, _ = nearest
         pulled = (phi > 0.0) & self._use
         y.attraction = AttractionSet(pts[pulled].copy(), -self.p.k_attract * phi[pulled, None] * n[pulled])
@@ -400,10 +402,11 @@ class Settle(Component[SettleParams]):
 
 class _Cache:
     """One run's settle state outside the discrete state: what output() saw, for calc_attraction
-    (terrain, link poses, nearest samples), and ``preload_forces`` (N per screw, set at the latch)."""
+    (link poses, and the nearest samples with the terrain and state version they came from:
+    terrain/derived.py), and ``preload_forces`` (N per screw, set at the latch)."""
 
-    __slots__ = ("terrain", "poses", "nearest", "preload_forces")
+    __slots__ = ("poses", "nearest", "preload_forces")
 
     def __init__(self, nl: int):
-        self.terrain, self.nearest, self.preload_forces = None, None, None
+        self.nearest, self.preload_forces = TerrainDerived(), None
         self.poses = np.full((nl, 7), np.nan)

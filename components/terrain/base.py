@@ -39,11 +39,13 @@ built in ``__init__``:
 - ``state`` holds named arrays that a kind's own model (a deformable terrain, the next issues) changes
   **in place** during a run (``state.x[...] = ...``, never ``state.x = new_array``), then calls
   ``state.changed()``, which bumps ``state.version``; ``query`` reads the state arrays at every call;
-- consumers that pack or bind terrain data (the contact components' ``use_terrain``, the sensors'
-  scene, the hull back end's coal parts) rebind only when the terrain *object* changes (``is not``),
-  never because its state changed: a compiled kernel bound to a state array sees the new values
-  through the same buffer. A consumer that derives something from the state (a display mesh) may
-  compare ``state.version`` with the version it built from.
+- consumers that pack or bind terrain data (the contact components' ``use_terrain``) rebind only
+  when the terrain *object* changes (``is not``), never because its state changed: a compiled kernel
+  bound to a state array sees the new values through the same buffer;
+- consumers that *derive* geometry from the terrain once and keep it (the sensors' Embree scene, the
+  viewer's mesh, a placement's nearest points; the hull back end's parts are the contact's to move
+  onto it) rebuild it when ``state.version`` differs from the version they built from, and only
+  then: one rule, :class:`~.derived.TerrainDerived` (terrain/derived.py), held per run.
 
 The built-in kinds are static: their state is empty and its version stays 0.
 """
@@ -102,20 +104,35 @@ class TerrainState:
 
         state = TerrainState(heights=np.zeros((n, m)))
         state.heights[i, j] -= dz      # in place: every bound buffer sees it
-        state.changed()                # version + 1: consumers that derive from the state notice
+        state.changed(t)               # version + 1, at simulated time t s: consumers that derive notice
 
-    An empty state (the static kinds) has no arrays and version 0.
+    ``version`` counts the changes (0: as built). The rule for consumers: what binds a state array
+    (a compiled kernel) sees a change through the same buffer and never rebinds for it; what derives
+    geometry from the terrain once and keeps it (the sensors' Embree scene, the viewer's mesh) keeps
+    it in a :class:`~.derived.TerrainDerived`, which rebuilds when ``version`` differs from the one it
+    built from, and only then (a static kind: never). ``changed_at`` is the simulated time (s) of the
+    last change when the model gave it (the viewer logs the new mesh there), else None.
+
+    An empty state (the static kinds) has no arrays and version 0; ``may_change`` is False for it, so
+    the viewer logs its mesh once, static.
     """
 
     def __init__(self, **arrays):
         self.version = 0
+        self.changed_at: float | None = None
         self.names: tuple[str, ...] = tuple(arrays)
         for name, value in arrays.items():
             setattr(self, name, np.asarray(value))
 
-    def changed(self) -> None:
-        """Say the arrays were changed (in place); bumps ``version``."""
+    def changed(self, t: float | None = None) -> None:
+        """Say the arrays were changed (in place), at simulated time ``t`` s if known; bumps ``version``."""
+        self.changed_at = None if t is None else float(t)
         self.version += 1
+
+    @property
+    def may_change(self) -> bool:
+        """Whether a run can change this state: it has arrays (a static kind's has none)."""
+        return bool(self.names)
 
     def arrays(self) -> dict[str, np.ndarray]:
         return {name: getattr(self, name) for name in self.names}
@@ -230,7 +247,9 @@ class Terrain:
     def display_mesh(self, center: np.ndarray, extent: float, cell: float, cutaway: np.ndarray | None) -> TerrainMesh:
         """The surface as triangles, ``extent`` m around ``center`` where unbounded, at about ``cell`` m;
         ``cutaway`` (unit, or None) the side an enclosing kind may leave open towards the viewer.
-        Default: the zero level set of :meth:`query` (display.level_set_mesh; no cut-away)."""
+        Drawn from the state as it is now (consumers that keep it redraw it when ``state.version``
+        moves: terrain/derived.py). Default: the zero level set of :meth:`query` (display.level_set_mesh;
+        no cut-away)."""
         from .display import level_set_mesh
 
         return level_set_mesh(self, center, extent, cell)

@@ -3,7 +3,8 @@
 Entity layout (one recording per run; timeline ``sim`` is simulated time, a
 duration in seconds from the run's t0)::
 
-    world/physical/terrain                     Mesh3D, static         the terrain surface
+    world/physical/terrain                     Mesh3D, static         the terrain surface (a terrain with state:
+                                                                      at the first frame and at each change)
     world/physical/<robot>/<link>              Transform3D per frame  link pose (world)
     world/physical/<robot>/<link>/visual       Mesh3D, static         URDF visual geometry, link frame
     world/physical/tethers                     LineStrips3D           tether polylines (when present)

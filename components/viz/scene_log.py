@@ -4,7 +4,8 @@ Shared by the live sink and ``snakesim replay`` so both produce the same
 entities (layout: :mod:`.entities`). Costs are kept off the simulation:
 
 - meshes (robot links, terrain) are logged once, static; afterwards a frame
-  is only each link's Transform3D;
+  is only each link's Transform3D (a terrain whose state can change is logged
+  on the ``sim`` timeline instead, once and at each change: ``log_terrain``);
 - frames are buffered (one numpy copy per frame into preallocated arrays)
   and sent with ``send_columns``, one call per entity per ``flush_frames``
   frames (per-frame ``log`` calls cost ~80 µs per entity); the link
@@ -104,9 +105,7 @@ class SceneLog:
                 rec.log(f"{path}/axes", rr.Arrows3D(vectors=np.eye(3) * L, colors=AXIS_COLORS, radii=0.02 * L,
                                                     labels=[name, "", ""], show_labels=False), static=True)
         if terrain_mesh is not None:
-            rec.log(E.TERRAIN, rr.Mesh3D(vertex_positions=terrain_mesh.vertices, triangle_indices=terrain_mesh.faces,
-                                         vertex_normals=terrain_mesh.normals, vertex_colors=terrain_mesh.colors,
-                                         face_rendering=rr.components.MeshFaceRendering.DoubleSided), static=True)
+            self.log_terrain(terrain_mesh)
         for signal, names, width in self.series:
             if names and len(names) == width:
                 rec.log(E.series_path(signal), rr.SeriesLines(names=list(names)), static=True)
@@ -119,6 +118,20 @@ class SceneLog:
             rec.log(E.TETHERS, rr.LineStrips3D.from_fields(colors=TETHER_COLOR, radii=0.006), static=True)
         if self.attraction:
             rec.log(E.ATTRACTION, rr.Arrows3D.from_fields(colors=ATTRACTION_COLOR, radii=0.005), static=True)
+
+    def log_terrain(self, mesh, t: float | None = None) -> None:
+        """The terrain's mesh (world frame): static when ``t`` is None, else at simulated time ``t`` s
+        (a terrain whose state changes: static data would hide every later mesh in rerun)."""
+        rr, rec = self.rr, self.rec
+        archetype = rr.Mesh3D(vertex_positions=mesh.vertices, triangle_indices=mesh.faces,
+                              vertex_normals=mesh.normals, vertex_colors=mesh.colors,
+                              face_rendering=rr.components.MeshFaceRendering.DoubleSided)
+        if t is None:
+            rec.log(E.TERRAIN, archetype, static=True)
+            return
+        rec.set_time(E.TIMELINE, duration=float(t))
+        rec.log(E.TERRAIN, archetype)
+        rec.reset_time()          # the frames are sent with explicit times; leave no time set behind
 
     # -- frames (buffered) ----------------------------------------------------------------
     def add_frame(self, t: float, poses=None, values: Sequence[np.ndarray] = (), rtf: float = np.nan,

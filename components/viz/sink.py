@@ -14,7 +14,9 @@ uses robot: RobotModel (the multibody's; optional): its links are the rows of li
      URDF visuals the meshes drawn (``robot.derived(link_meshes)``: built once per robot); with
      several providers name one with ``uses: {robot: NAME}``. No robot in the scene: no links drawn
 in   link_poses[nl, 7]  m, 1  [x, y, z, qx, qy, qz, qw] per link, world (the multibody's; optional)
-     terrain            Terrain, drawn once as a static mesh (optional)
+     terrain            Terrain, drawn once as a static mesh (optional); a terrain with state
+                        (``terrain.state.may_change``) is drawn at the first frame and again, at
+                        the change's time, whenever its ``state.version`` moves (terrain/derived.py)
      contacts           ContactSet (any contact back end): points and forces, split into normal
                         and friction arrows (optional)
      attraction         AttractionSet: placement_settle's attraction springs, points (m, 3) and
@@ -57,7 +59,7 @@ from pydantic import Field, field_validator
 from snakesim.components.contact import ContactSet
 from snakesim.components.multibody.robot_model import RobotModel
 from snakesim.components.placement import AttractionSet
-from snakesim.components.terrain import Terrain
+from snakesim.components.terrain import Terrain, TerrainDerived
 from snakesim.framework import Component, Input, Params, Uses
 from snakesim.components.port_roles import LINK_POSES
 
@@ -140,7 +142,7 @@ class RerunSink(Component[RerunSinkParams]):
 
     link_poses = Input(shape=lambda c: (len(c.links), 7), unit=None, default=0.0,
                        doc="[x, y, z, qx, qy, qz, qw] per link, world", role=LINK_POSES)
-    terrain = Input(type=Terrain, required=False, doc="drawn once, static")
+    terrain = Input(type=Terrain, required=False, doc="drawn once, static (again at each change of its state)")
     contacts = Input(type=ContactSet, required=False, doc="contact points and forces, any contact back end")
     tethers = Input(type=object, required=False, doc="anything with strips/points polylines")
     attraction = Input(type=AttractionSet, required=False, doc="placement springs: points (m,3), forces (m,3)")
@@ -182,6 +184,8 @@ class RerunSink(Component[RerunSinkParams]):
             if v.last_t > -np.inf:                   # closed at t_end: nothing more this run
                 return
             self._open(v, t, u)
+        if v.terrain_mesh is not None and u.terrain is not None and v.terrain_mesh.stale(u.terrain):
+            _log_terrain(v, t, u.terrain)          # first frame, or the terrain's state changed
         wall = time.perf_counter()
         rtf = (t - v.last_t) / (wall - v.last_wall) if v.last_t > -np.inf else np.nan
         v.last_t, v.last_wall = t, wall
@@ -210,9 +214,15 @@ class RerunSink(Component[RerunSinkParams]):
         pos = np.asarray(v.poses)[:, :3] if len(self.links) else np.zeros((1, 3))
         center = np.asarray(p.terrain_center) if p.terrain_center is not None else pos.mean(axis=0)
         terrain = u.terrain
-        tmesh = None
+        tmesh = v.terrain_mesh = None
         if terrain is not None:
-            tmesh = terrain_mesh(terrain, center, p.terrain_extent, p.terrain_cell, p.terrain_cutaway)
+            def draw(terrain):
+                return terrain_mesh(terrain, center, p.terrain_extent, p.terrain_cell, p.terrain_cutaway)
+
+            if terrain.state.may_change:           # logged in time by update(), now and at each change
+                v.terrain_mesh = TerrainDerived(draw)
+            else:
+                tmesh = draw(terrain)
         series = [(s, None, int(np.size(a))) for s, a in zip(p.series, v.series)]
         v.sensor_inputs = [sensor_input_name(i) for i in range(len(p.sensors))]
         bp = default_blueprint(pos, [E.series_path(s) for s in p.series],
@@ -254,6 +264,7 @@ class _Viewing:
         self.poses, self.series, self.ropes = None, [], None
         self.has_contacts = self.has_tethers = self.has_attraction = False
         self.sensors, self.sensor_inputs = None, []
+        self.terrain_mesh = None        # TerrainDerived of a terrain with state; None: static or none
 
     def close(self) -> None:
         """Send what is queued and close the recording (idempotent)."""
@@ -275,6 +286,15 @@ class _Ropes:
         c = np.cross(qv, self.offsets)
         tie = P[:, :3] + self.offsets + 2 * w * c + 2 * np.cross(qv, c)
         return np.stack([tie, self.anchors], axis=1)
+
+
+def _log_terrain(v: _Viewing, t: float, terrain: Terrain) -> None:
+    """Log the mesh of a terrain with state as it is now: at its first frame ``t``, then at the time its
+    model gave the change (``state.changed_at``), else at the frame that noticed it."""
+    first = v.terrain_mesh.builds == 0
+    mesh = v.terrain_mesh.get(terrain)
+    at = terrain.state.changed_at
+    v.log.log_terrain(mesh, t if first or at is None else at)
 
 
 def _ropes(lines, links) -> _Ropes | None:

@@ -5,8 +5,9 @@
 For documentation on machines where rerun's own viewer cannot render (it
 needs a GPU or a working software Vulkan/WebGPU). Reads the recording back
 with rerun's reader and draws what the viewer would show at ``--time``: the
-static meshes (terrain, robot link visuals) placed by each link's latest
-Transform3D, tether strips and contact points/arrows. Flat Lambert shading
+static meshes (terrain, robot link visuals; a changing terrain's latest mesh)
+placed by each link's latest Transform3D, tether strips and contact
+points/arrows. Flat Lambert shading
 of the logged vertex colours; no textures, no anti-aliasing.
 """
 
@@ -48,6 +49,10 @@ def scene_at(path, time: float):
     def now(entity, name):
         return latest.get((entity, name), (None, None))[1]
 
+    # a terrain whose state changes is logged in time (scene_log.log_terrain): its mesh at ``time``
+    for (entity, name), (_, value) in latest.items():
+        if name.startswith("Mesh3D:"):
+            static.setdefault(entity, {})[name] = value
     meshes = []
     for entity, comps in static.items():
         if "Mesh3D:vertex_positions" not in comps:
