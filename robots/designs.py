@@ -81,7 +81,7 @@ from __future__ import annotations
 
 import difflib
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Literal, Mapping
 
 ScrewLayout = Literal["pair", "front", "none"]
@@ -186,15 +186,22 @@ class Design:
 
 # EELS 1.0 sizing: ~4.4 m and ~100 kg for 10 modules, screws of 0.09 m outer
 # radius. 10 x (1.5 knuckle + 4.0 body + 2 x 2.0 screws) + 1.5 tail + 3.5 head = 100 kg.
-_EELS_1_0_DIMENSIONS = Dimensions(
-    module_length=0.40, outer_radius=0.09, core_ratio=0.75, tail_length=0.10,
-    knuckle_length=0.06, screw_starts=3, lead_angle=0.35, head_length=0.25,
-)
-_EELS_1_0_MASSES = Masses(tail=1.5, module_body=4.0, knuckle=1.5, screw=2.0, head=3.5)
-_EELS_1_0_LIMITS = ActuatorLimits(
-    bend_range=math.pi / 4, bend_effort=120.0, bend_velocity=1.0,
-    twist_range=math.pi / 2, twist_effort=60.0, twist_velocity=1.0,
-    screw_effort=30.0, screw_velocity=10.0,
+_EELS_1_0 = Design(
+    name="eels-1.0",
+    title="EELS 1.0, alternating (two counter-rotating screws per module, optional perception head)",
+    default_modules=10,
+    screws="pair", twist=True, bend_axes="pitch", head="perception",
+    cross_bar=False, force_torque_sensors=False,
+    dimensions=Dimensions(
+        module_length=0.40, outer_radius=0.09, core_ratio=0.75, tail_length=0.10,
+        knuckle_length=0.06, screw_starts=3, lead_angle=0.35, head_length=0.25,
+    ),
+    masses=Masses(tail=1.5, module_body=4.0, knuckle=1.5, screw=2.0, head=3.5),
+    limits=ActuatorLimits(
+        bend_range=math.pi / 4, bend_effort=120.0, bend_velocity=1.0,
+        twist_range=math.pi / 2, twist_effort=60.0, twist_velocity=1.0,
+        screw_effort=30.0, screw_velocity=10.0,
+    ),
 )
 
 DESIGNS: Mapping[str, Design] = {
@@ -204,12 +211,8 @@ DESIGNS: Mapping[str, Design] = {
             name="eels-concept",
             title="EELS early design concept (two counter-rotating screws per module, capped head)",
             default_modules=8,
-            screws="pair",
-            twist=False,
-            bend_axes="alternating",
-            head="cap",
-            cross_bar=False,
-            force_torque_sensors=False,
+            screws="pair", twist=False, bend_axes="alternating", head="cap",
+            cross_bar=False, force_torque_sensors=False,
             dimensions=Dimensions(
                 module_length=0.45, outer_radius=0.09, core_ratio=0.75, tail_length=0.10,
                 screw_starts=3, lead_angle=0.35, head_length=0.12,
@@ -218,44 +221,16 @@ DESIGNS: Mapping[str, Design] = {
             limits=ActuatorLimits(bend_range=math.pi / 4, bend_effort=120.0, bend_velocity=1.0,
                                   screw_effort=30.0, screw_velocity=10.0),
         ),
-        Design(
-            name="eels-1.0",
-            title="EELS 1.0, alternating (two counter-rotating screws per module, optional perception head)",
-            default_modules=10,
-            screws="pair",
-            twist=True,
-            bend_axes="pitch",
-            head="perception",
-            cross_bar=False,
-            force_torque_sensors=False,
-            dimensions=_EELS_1_0_DIMENSIONS,
-            masses=_EELS_1_0_MASSES,
-            limits=_EELS_1_0_LIMITS,
-        ),
-        Design(
-            name="eels-1.0-front",
-            title="EELS 1.0, front only (one screw per module, optional perception head)",
-            default_modules=10,
-            screws="front",
-            twist=True,
-            bend_axes="pitch",
-            head="perception",
-            cross_bar=False,
-            force_torque_sensors=False,
-            dimensions=_EELS_1_0_DIMENSIONS,
-            masses=_EELS_1_0_MASSES,
-            limits=_EELS_1_0_LIMITS,
-        ),
+        _EELS_1_0,
+        # the same hardware with the rear screws removed
+        replace(_EELS_1_0, name="eels-1.0-front", screws="front",
+                title="EELS 1.0, front only (one screw per module, optional perception head)"),
         Design(
             name="eels-1.5",
             title="EELS 1.5 (subsurface; cross bar with avionics box, force-torque sensors between modules)",
             default_modules=4,
-            screws="front",
-            twist=True,
-            bend_axes="pitch",
-            head="none",
-            cross_bar=True,
-            force_torque_sensors=True,
+            screws="front", twist=True, bend_axes="pitch", head="none",
+            cross_bar=True, force_torque_sensors=True,
             # 0.08 tail + 4 x 0.35 modules + 0.20 cross bar = 1.68 m
             dimensions=Dimensions(
                 module_length=0.35, outer_radius=0.07, core_ratio=0.75, tail_length=0.08,
@@ -274,12 +249,8 @@ DESIGNS: Mapping[str, Design] = {
             name="mini-eels-1.0",
             title="Mini EELS 1.0 (bend joints only, no screws)",
             default_modules=10,
-            screws="none",
-            twist=False,
-            bend_axes="alternating",
-            head="none",
-            cross_bar=False,
-            force_torque_sensors=False,
+            screws="none", twist=False, bend_axes="alternating", head="none",
+            cross_bar=False, force_torque_sensors=False,
             # hobby-servo modules: 0.06 tail + 10 x 0.09 = 0.96 m, ~3 kg
             dimensions=Dimensions(module_length=0.09, outer_radius=0.028, core_ratio=1.0, tail_length=0.06),
             masses=Masses(tail=0.15, module_body=0.28),

@@ -15,7 +15,6 @@ and column for XML syntax errors).
 
 from __future__ import annotations
 
-import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -65,13 +64,10 @@ class UrdfStructure:
 
 def parse_structure(text: str, source: str = "<urdf>") -> UrdfStructure:
     """Structure of the URDF in ``text``; ``source`` names it in errors."""
-    try:
-        robot = ET.fromstring(text)
-    except ET.ParseError as exc:
-        line, column = exc.position
-        raise URDFError(f"{source}:{line}:{column}: malformed XML: {_reason(exc)}") from None
-    if robot.tag != "robot":
-        raise URDFError(f"{source}: root element is <{robot.tag}>, a URDF needs <robot>")
+    # imported here: snakesim.components.multibody loads Pinocchio, which `import snakesim.robots` need not
+    from snakesim.components.multibody.urdf import robot_element
+
+    robot = robot_element(text, source, URDFError)
 
     problems: list[str] = []
     links: list[str] = []
@@ -185,8 +181,3 @@ def _membership(kind: str, candidate: list[str] | tuple[str, ...], baseline: lis
     out = [f"{kind} {name!r}: missing (baseline has it)" for name in baseline if name not in cand]
     out += [f"{kind} {name!r}: not in the baseline" for name in candidate if name not in base]
     return out
-
-
-def _reason(exc: ET.ParseError) -> str:
-    # ParseError's message ends with ": line L, column C", already in our prefix
-    return str(exc).rsplit(": line ", 1)[0]

@@ -93,9 +93,11 @@ import numpy as np
 from pydantic import Field
 
 from snakesim.components.multibody.robot_model import RobotModel
+from snakesim.components.multibody.robot_ports import joint_names, joint_shape
 from snakesim.framework import Component, Input, Output, Params, Uses
 
 from .joint_selection import finite_or_raise, per_joint
+from .setpoint_ports import command_input
 
 A, PHASE, LOAD, SPEED, E_PREV, REGRIP, NX = 0, 1, 2, 3, 4, 5, 6     # then nj limit-guard torques
 
@@ -154,13 +156,13 @@ class BraceClimb(Component[BraceClimbParams]):
     robot = Uses(RobotModel)
 
     loads = Input(shape=None, unit="N")
-    target_force = Input(shape=(1,), unit="N", default=np.nan)
-    climb_speed = Input(shape=(1,), unit="rad/s", default=np.nan)
-    joint_q = Input(shape=lambda c: (c.robot.nj,), unit="rad", default=np.nan)
+    target_force = command_input("N")
+    climb_speed = command_input("rad/s")
+    joint_q = Input(shape=joint_shape, unit="rad", default=np.nan)
     link_velocities = Input(shape=None, unit=None, default=np.nan)
-    descent_speed = Input(shape=(1,), unit="m/s", default=np.nan)
-    setpoint = Output(shape=lambda c: (c.robot.nj,), unit=None, feedthrough=(), names=lambda c: c.robot.joints)
-    tau_ff = Output(shape=lambda c: (c.robot.nj,), unit="N*m", feedthrough=(), names=lambda c: c.robot.joints)
+    descent_speed = command_input("m/s")
+    setpoint = Output(shape=joint_shape, unit=None, feedthrough=(), names=joint_names)
+    tau_ff = Output(shape=joint_shape, unit="N*m", feedthrough=(), names=joint_names)
     amplitude = Output(shape=(1,), unit="rad", feedthrough=())
     phase = Output(shape=(1,), unit="1", feedthrough=())
     load = Output(shape=(1,), unit="N", feedthrough=())

@@ -36,9 +36,10 @@ import numpy as np
 from pydantic import Field
 
 from snakesim.components.multibody.robot_model import RobotModel
-from snakesim.framework import Component, ContinuousState, Input, Output, Params, Uses
+from snakesim.framework import Component, ContinuousState, Params, Uses
 
 from .joint_selection import finite_or_raise, match, per_joint
+from .setpoint_ports import command_input, setpoint_outputs
 
 
 class JointSetpointsParams(Params):
@@ -47,14 +48,6 @@ class JointSetpointsParams(Params):
                                               description="multiplier (e.g. -1) by screw joint name/pattern")
     hold: dict[str, float] = Field(default_factory=dict, description="rad, held angle of non-screw joints")
     setpoints: dict[str, float] = Field(default_factory=dict, description="explicit value by joint name/pattern")
-
-
-def _nj(c):
-    return (c.robot.nj,)
-
-
-def _joints(c):
-    return c.robot.joints
 
 
 def constant_setpoints(robot: RobotModel, p, owner: str) -> np.ndarray:
@@ -78,8 +71,7 @@ def constant_setpoints(robot: RobotModel, p, owner: str) -> np.ndarray:
 class JointSetpoints(Component[JointSetpointsParams]):
     type_name = "joint_setpoints"
     robot = Uses(RobotModel)
-    setpoint = Output(shape=_nj, unit=None, feedthrough=(), names=_joints)
-    rate = Output(shape=_nj, unit="rad/s", feedthrough=(), names=_joints)
+    setpoint, rate = setpoint_outputs()
 
     def setup(self):
         self._value = constant_setpoints(self.robot, self.p, self.name)
@@ -123,12 +115,11 @@ _SERPENOID_INPUTS = ("amplitude", "frequency", "wavelength", "direction")
 class SerpenoidGait(Component[SerpenoidParams]):
     type_name = "serpenoid_gait"
     robot = Uses(RobotModel)
-    amplitude = Input(shape=(1,), unit="rad", default=np.nan)
-    frequency = Input(shape=(1,), unit="Hz", default=np.nan)
-    wavelength = Input(shape=(1,), unit="1", default=np.nan)
-    direction = Input(shape=(1,), unit="1", default=np.nan)
-    setpoint = Output(shape=_nj, unit=None, feedthrough=_SERPENOID_INPUTS, names=_joints)
-    rate = Output(shape=_nj, unit="rad/s", feedthrough=_SERPENOID_INPUTS, names=_joints)
+    amplitude = command_input("rad")
+    frequency = command_input("Hz")
+    wavelength = command_input("1")
+    direction = command_input("1")
+    setpoint, rate = setpoint_outputs(_SERPENOID_INPUTS)
 
     def setup(self):
         p, names = self.p, self.robot.joints

@@ -65,11 +65,13 @@ from typing import Literal
 import numpy as np
 from pydantic import Field, model_validator
 
-from snakesim.framework import Component, ContinuousState, Input, Output, Params, Uses
+from snakesim.framework import Component, ContinuousState, Input, Params, Uses
 from snakesim.components.multibody.robot_model import RobotModel
+from snakesim.components.multibody.robot_ports import link_shape
 
-from .gaits import JointSetpointsParams, _joints, _nj, command, command_direction, constant_setpoints
+from .gaits import JointSetpointsParams, command, command_direction, constant_setpoints
 from .joint_selection import match
+from .setpoint_ports import command_input, setpoint_outputs
 
 
 class HelixShape(Params):
@@ -150,13 +152,12 @@ _HELIX_INPUTS = ("link_rotations", "amplitude", "frequency", "phase_step", "dire
 class HelicalGait(Component[HelicalGaitParams]):
     type_name = "helical_gait"
     robot = Uses(RobotModel)
-    link_rotations = Input(shape=lambda c: (c.robot.nl, 3, 3), unit="1", default=np.nan)
-    amplitude = Input(shape=(1,), unit="rad", default=np.nan)
-    frequency = Input(shape=(1,), unit="Hz", default=np.nan)
-    phase_step = Input(shape=(1,), unit="rad", default=np.nan)
-    direction = Input(shape=(1,), unit="1", default=np.nan)
-    setpoint = Output(shape=_nj, unit=None, feedthrough=_HELIX_INPUTS, names=_joints)
-    rate = Output(shape=_nj, unit="rad/s", feedthrough=_HELIX_INPUTS, names=_joints)
+    link_rotations = Input(shape=link_shape(3, 3), unit="1", default=np.nan)
+    amplitude = command_input("rad")
+    frequency = command_input("Hz")
+    phase_step = command_input("rad")
+    direction = command_input("1")
+    setpoint, rate = setpoint_outputs(_HELIX_INPUTS)
 
     def setup(self):
         p = self.p

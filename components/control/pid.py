@@ -53,6 +53,7 @@ import numpy as np
 from pydantic import ConfigDict, Field
 
 from snakesim.components.multibody.robot_model import JOINT_KINDS, RobotModel
+from snakesim.components.multibody.robot_ports import joint_names, joint_shape
 from snakesim.framework import Component, ContinuousState, Input, Output, Params, Uses
 from snakesim.components.port_roles import JOINT_EFFORTS, JOINT_POSITIONS, JOINT_VELOCITIES
 
@@ -91,25 +92,30 @@ class JointPidParams(Params):
     anti_windup: Literal["clamp", "none"] = "clamp"
 
 
-def _nj(c):
-    return (c.robot.nj,)
-
-
-def _joints(c):
-    return c.robot.joints
+def _kept_while_same(cache, slot: str, mask: np.ndarray, build):
+    """``build(mask)``, kept in ``cache.<slot>`` and returned again while the boolean per-joint ``mask``
+    is the same: a Jacobian changes only when a joint saturates or its integral clamps or releases, and
+    returning the same object lets the linearization reuse what it composed from it. The mask is
+    compared as bytes (a cheap ==)."""
+    key = mask.tobytes()
+    kept = getattr(cache, slot)
+    if kept is None or kept[0] != key:
+        kept = (key, build(np.frombuffer(key, dtype=bool)))
+        setattr(cache, slot, kept)
+    return kept[1]
 
 
 class JointPid(Component[JointPidParams]):
     type_name = "joint_pid"
     robot = Uses(RobotModel)
 
-    setpoint = Input(shape=_nj, unit=None, names=_joints)
-    rate_ref = Input(shape=_nj, unit="rad/s", default=0.0)
-    tau_ff = Input(shape=_nj, unit="N*m", default=0.0)
-    q = Input(shape=_nj, unit="rad", role=JOINT_POSITIONS)
-    v = Input(shape=_nj, unit="rad/s", role=JOINT_VELOCITIES)
-    tau = Output(shape=_nj, unit="N*m", feedthrough=True, names=_joints, role=JOINT_EFFORTS)
-    error = Output(shape=_nj, unit=None, feedthrough=True, names=_joints)
+    setpoint = Input(shape=joint_shape, unit=None, names=joint_names)
+    rate_ref = Input(shape=joint_shape, unit="rad/s", default=0.0)
+    tau_ff = Input(shape=joint_shape, unit="N*m", default=0.0)
+    q = Input(shape=joint_shape, unit="rad", role=JOINT_POSITIONS)
+    v = Input(shape=joint_shape, unit="rad/s", role=JOINT_VELOCITIES)
+    tau = Output(shape=joint_shape, unit="N*m", feedthrough=True, names=joint_names, role=JOINT_EFFORTS)
+    error = Output(shape=joint_shape, unit=None, feedthrough=True, names=joint_names)
 
     # -- set-up: one array per gain ---------------------------------------------------
     def setup(self):
@@ -223,11 +229,8 @@ class JointPid(Component[JointPidParams]):
         The same object is returned while no joint enters or leaves saturation."""
         if port != "tau":
             return None
-        c = u.cache
-        live = (np.abs(y.tau) < self._tmax).tobytes()      # saturated joints pass nothing on (bytes: a cheap ==)
-        if c.jac_tau is None or c.jac_tau[0] != live:
-            c.jac_tau = (live, self._tau_jacobian(np.frombuffer(live, dtype=bool)))
-        return c.jac_tau[1]
+        live = np.abs(y.tau) < self._tmax                   # saturated joints pass nothing on
+        return _kept_while_same(u.cache, "jac_tau", live, self._tau_jacobian)
 
     def _tau_jacobian(self, live):
         from snakesim.framework.linearization import Elementwise
@@ -253,10 +256,8 @@ class JointPid(Component[JointPidParams]):
         if self._discrete:
             return None
         c = u.cache
-        held = ((c.dint == 0.0) & (y.error != 0.0)).tobytes()     # clamped integrals do not move
-        if c.jac_state is None or c.jac_state[0] != held:
-            c.jac_state = (held, self._state_jacobian(np.frombuffer(held, dtype=bool)))
-        return c.jac_state[1]
+        held = (c.dint == 0.0) & (y.error != 0.0)                 # clamped integrals do not move
+        return _kept_while_same(c, "jac_state", held, self._state_jacobian)
 
     def _state_jacobian(self, held):
         from snakesim.framework.linearization import Elementwise

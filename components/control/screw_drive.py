@@ -22,6 +22,7 @@ from pydantic import Field
 
 from snakesim.framework import Component, Input, Output, Params, Uses
 from snakesim.components.multibody.robot_model import RobotModel
+from snakesim.components.multibody.robot_ports import joint_names, joint_shape
 
 from ..contact.robot_screws import screw_layout
 
@@ -37,9 +38,9 @@ class ScrewDriveParams(Params):
 class ScrewDrive(Component[ScrewDriveParams]):
     type_name = "screw_drive"
     robot = Uses(RobotModel)
-    joint_q = Input(shape=lambda c: (c.robot.nj,), unit="rad", names=lambda c: c.robot.joints)
-    joint_v = Input(shape=lambda c: (c.robot.nj,), unit="rad/s", names=lambda c: c.robot.joints)
-    tau = Output(shape=lambda c: (c.robot.nj,), unit="N*m", feedthrough=True, names=lambda c: c.robot.joints)
+    joint_q = Input(shape=joint_shape, unit="rad", names=joint_names)
+    joint_v = Input(shape=joint_shape, unit="rad/s", names=joint_names)
+    tau = Output(shape=joint_shape, unit="N*m", feedthrough=True, names=joint_names)
 
     def setup(self):
         p = self.p

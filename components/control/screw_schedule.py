@@ -31,6 +31,7 @@ from snakesim.framework import Component, Output, Params, Uses
 
 from .joint_selection import finite_or_raise, per_joint
 from .schedule import check_switch_times
+from .setpoint_ports import setpoint_outputs
 
 GROUPS = ("all", "tail_half", "head_half")
 _MODULE = re.compile(r"_(\d+)$")
@@ -46,14 +47,6 @@ class ScrewScheduleParams(Params):
     def _check(self):
         check_switch_times(self.times, self.speeds, "speeds")
         return self
-
-
-def _nj(c):
-    return (c.robot.nj,)
-
-
-def _joints(c):
-    return c.robot.joints
 
 
 def screw_groups(robot: RobotModel) -> dict[str, np.ndarray]:
@@ -88,8 +81,7 @@ def phase_vector(names, speeds: dict[str, float], base: np.ndarray, groups, owne
 class ScrewSchedule(Component[ScrewScheduleParams]):
     type_name = "screw_schedule"
     robot = Uses(RobotModel)
-    setpoint = Output(shape=_nj, unit=None, feedthrough=(), names=_joints)
-    rate = Output(shape=_nj, unit="rad/s", feedthrough=(), names=_joints)
+    setpoint, rate = setpoint_outputs()
     phase = Output(shape=(1,), unit="1", feedthrough=())
 
     def setup(self):

@@ -17,6 +17,7 @@ import numpy as np
 from pydantic import Field
 
 from snakesim.components.multibody.robot_model import RobotModel
+from snakesim.components.multibody.robot_ports import joint_names, joint_shape
 from snakesim.framework import Component, Input, Output, Params, Uses
 
 from .joint_selection import finite_or_raise, per_joint, wrap_angle
@@ -28,17 +29,14 @@ class SpringDamperParams(Params):
     rest: dict[str, float] = Field(default_factory=dict, description="rest angle q0, rad, by joint name or pattern")
 
 
-def _nj(c):
-    return (c.robot.nj,)
-
 
 class JointSpringDamper(Component[SpringDamperParams]):
     type_name = "joint_spring_damper"
     robot = Uses(RobotModel)
 
-    q = Input(shape=_nj, unit="rad")
-    v = Input(shape=_nj, unit="rad/s")
-    tau = Output(shape=_nj, unit="N*m", feedthrough=True, names=lambda c: c.robot.joints)
+    q = Input(shape=joint_shape, unit="rad")
+    v = Input(shape=joint_shape, unit="rad/s")
+    tau = Output(shape=joint_shape, unit="N*m", feedthrough=True, names=joint_names)
 
     def setup(self):
         p, names = self.p, self.robot.joints

@@ -21,17 +21,18 @@ bad file is a ValueError naming the file, the line/column and what is valid.
 from __future__ import annotations
 
 import csv
-import math
 from pathlib import Path
 from typing import Literal
 
 import numpy as np
 from pydantic import Field
 
+from snakesim.components.csv_numbers import finite_number
 from snakesim.components.multibody.robot_model import RobotModel
-from snakesim.framework import Component, Output, Params, Uses
+from snakesim.framework import Component, Params, Uses
 
 from .joint_selection import finite_or_raise, per_joint
+from .setpoint_ports import setpoint_outputs
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
 
@@ -77,13 +78,7 @@ def read_trajectory(name: str, joints) -> tuple[np.ndarray, list[str], np.ndarra
         if len(r) != len(header):
             raise ValueError(f"{path}:{ln}: {len(r)} fields, the header has {len(header)}")
         for j, cell in enumerate(r):
-            try:
-                v = float(cell)
-            except ValueError:
-                raise ValueError(f"{path}:{ln}: column '{header[j]}': '{cell.strip()}' is not a number") from None
-            if not math.isfinite(v):
-                raise ValueError(f"{path}:{ln}: column '{header[j]}': {cell.strip()} (values must be finite)")
-            data[k, j] = v
+            data[k, j] = finite_number(cell, f"{path}:{ln}: column '{header[j]}'")
     t = data[:, 0]
     dt = np.diff(t)
     if (dt <= 0).any():
@@ -93,19 +88,10 @@ def read_trajectory(name: str, joints) -> tuple[np.ndarray, list[str], np.ndarra
     return t, cols, data[:, 1:]
 
 
-def _nj(c):
-    return (c.robot.nj,)
-
-
-def _joints(c):
-    return c.robot.joints
-
-
 class CsvTrajectory(Component[CsvTrajectoryParams]):
     type_name = "csv_trajectory"
     robot = Uses(RobotModel)
-    setpoint = Output(shape=_nj, unit=None, feedthrough=(), names=_joints)
-    rate = Output(shape=_nj, unit="rad/s", feedthrough=(), names=_joints)
+    setpoint, rate = setpoint_outputs()
 
     def setup(self):
         p = self.p

@@ -25,8 +25,11 @@ import numpy as np
 from pydantic import Field
 
 from snakesim.components.multibody.robot_model import RobotModel
+from snakesim.components.multibody.robot_ports import joint_shape
 from snakesim.components.port_roles import JOINT_POSITIONS
 from snakesim.framework import Component, Input, Output, Params, Uses
+
+from .watch import RunningWorst, WorstSoFarOutput, require_rate
 
 
 class JointLimitsParams(Params):
@@ -34,49 +37,40 @@ class JointLimitsParams(Params):
     stop_on_violation: bool = Field(False, description="end the run when a joint first goes past a limit")
 
 
-class _Worst:
-    """Per-run scratch: the worst angle past each limit (excess, angle) and when the first one happened."""
+class _Worst(RunningWorst):
+    """Per-run scratch: each joint's worst excess past a limit (``worst``, rad), the angle it had then,
+    and the first breach."""
 
     def __init__(self, nj: int):
-        self.excess = np.zeros(nj)
+        super().__init__(nj)
         self.angle = np.full(nj, np.nan)
-        self.first: tuple[float, str, float] | None = None
 
 
-class JointLimits(Component[JointLimitsParams]):
+class JointLimits(WorstSoFarOutput, Component[JointLimitsParams]):
     type_name = "joint_limits"
+    WORST_OUTPUT = "max_excess"
     robot = Uses(RobotModel)
 
-    joint_q = Input(shape=lambda c: (c.robot.nj,), unit="rad", role=JOINT_POSITIONS)
+    joint_q = Input(shape=joint_shape, unit="rad", role=JOINT_POSITIONS)
     max_excess = Output(shape=(), unit="rad")
 
     def setup(self):
-        if self.rate is None:
-            raise ValueError(f"{self.name}: joint_limits samples at a rate: give it `rate: HZ`")
+        require_rate(self)
         self._lo, self._hi = self.robot.position_limits()
 
     def make_cache(self, x, u, y):
         return _Worst(self.robot.nj)
 
-    def discrete_state(self):
-        return np.zeros(1)
-
-    def output(self, t, x, u, y):
-        y.max_excess[...] = x[0]
-
     def update(self, t, xd, u):
         q = np.asarray(u.joint_q, float)
         excess = np.maximum(np.maximum(q - self._hi, self._lo - q), 0.0)
         w = u.cache
-        worse = excess > w.excess
-        w.excess[worse], w.angle[worse] = excess[worse], q[worse]
-        xd[0] = float(w.excess.max(initial=0.0))
-        if w.first is None and xd[0] > self.p.tolerance:
-            j = int(np.argmax(w.excess))
-            w.first = (t, self.robot.joints[j], float(q[j]))
-            if self.p.stop_on_violation:
-                self.stop(f"joint {self.robot.joints[j]} at {q[j]:.4g} rad is past its limits "
-                          f"[{self._lo[j]:.4g}, {self._hi[j]:.4g}] rad (joint stops off, or overpowered)")
+        worse = excess > w.worst
+        w.worst[worse], w.angle[worse] = excess[worse], q[worse]
+        j = w.end_sample(t, xd, self.p.tolerance, self.robot.joints, q)
+        if j is not None and self.p.stop_on_violation:
+            self.stop(f"joint {self.robot.joints[j]} at {q[j]:.4g} rad is past its limits "
+                      f"[{self._lo[j]:.4g}, {self._hi[j]:.4g}] rad (joint stops off, or overpowered)")
 
     # -- the run's report (framework/run_reports.py) -------------------------------------------
     def report(self, cache, summary: dict) -> dict:
@@ -84,13 +78,11 @@ class JointLimits(Component[JointLimitsParams]):
         if cache is None:
             return {}
         tol = self.p.tolerance
-        order = [j for j in np.argsort(-cache.excess) if cache.excess[j] > tol]
-        r = {"tolerance_rad": tol, "max_excess_rad": float(cache.excess.max(initial=0.0)),
+        r = {"tolerance_rad": tol, "max_excess_rad": float(cache.worst.max(initial=0.0)),
              "past_limits": {self.robot.joints[j]: {"angle_rad": float(cache.angle[j]), "lower_rad": float(self._lo[j]),
                                                     "upper_rad": float(self._hi[j]),
-                                                    "excess_rad": float(cache.excess[j])} for j in order}}
-        if cache.first is not None:
-            r["first"] = {"time_s": cache.first[0], "joint": cache.first[1], "angle_rad": cache.first[2]}
+                                                    "excess_rad": float(cache.worst[j])} for j in cache.over(tol)},
+             **cache.first_report("joint", "angle_rad")}
         return r
 
     @staticmethod

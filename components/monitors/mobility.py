@@ -40,7 +40,11 @@ from pydantic import Field
 
 from snakesim.components.control.joint_selection import match
 from snakesim.components.multibody.robot_model import RobotModel
+from snakesim.components.multibody.robot_ports import link_shape
 from snakesim.framework import Component, Input, Output, Params, Uses
+
+from .tilt import TiltRule
+from .watch import contact_hold_outputs
 
 Vec3 = tuple[float, float, float]
 
@@ -64,32 +68,22 @@ class MobilityMonitor(Component[MobilityParams]):
     type_name = "mobility_monitor"
     robot = Uses(RobotModel)
 
-    link_rotations = Input(shape=lambda c: (c.robot.nl, 3, 3), unit="1")
-    link_poses = Input(shape=lambda c: (c.robot.nl, 7), unit=None)
-    link_velocities = Input(shape=lambda c: (c.robot.nl, 6), unit=None)
+    link_rotations = Input(shape=link_shape(3, 3), unit="1")
+    link_poses = Input(shape=link_shape(7), unit=None)
+    link_velocities = Input(shape=link_shape(6), unit=None)
     contacts = Input(shape=(1,), unit=None, default=np.nan)
     tilt = Output(shape=lambda c: (len(c.tilt_names),), unit="rad", names=lambda c: c.tilt_names)
     max_tilt = Output(shape=(), unit="rad")
     failed = Output(shape=(), unit="1")
-    contact_made = Output(shape=(), unit="1")
-    t_contact = Output(shape=(), unit="s", may_be_nan=True)
-    hold_time = Output(shape=(), unit="s")
-    max_hold_time = Output(shape=(), unit="s")
+    contact_made, t_contact, hold_time, max_hold_time = contact_hold_outputs()
     climb = Output(shape=(), unit="m")
     max_climb = Output(shape=(), unit="m")
 
     def setup(self):
         p = self.p
         links = list(self.robot.links)
-        g = np.array(p.gravity, dtype=float)
-        a = np.array(p.axis, dtype=float)
-        if not (np.linalg.norm(g) > 0 and np.linalg.norm(a) > 0):
-            raise ValueError(f"{self.name}: gravity and axis need a direction (non-zero), got {p.gravity}, {p.axis}")
-        self._up = -g / np.linalg.norm(g)
-        self._axis = a / np.linalg.norm(a)
-        tilt_i = sorted({i for pat in p.tilt_links for i in match(links, pat, f"{self.name}: tilt_links")})
-        self._tilt_i = np.array(tilt_i, dtype=np.int64)
-        self.tilt_names = tuple(links[i] for i in tilt_i)
+        self._tilt = TiltRule(self.name, links, p)
+        self._up, self.tilt_names = self._tilt.up, self._tilt.names
         self._hold_i = np.array(sorted({i for pat in p.hold_links for i in match(links, pat, f"{self.name}: hold_links")}),
                                 dtype=np.int64)
         ref = p.reference_link if p.reference_link is not None else links[0]
@@ -101,12 +95,7 @@ class MobilityMonitor(Component[MobilityParams]):
         return np.zeros(8)          # t_contact is read only once contact_made is 1 (state must stay finite)
 
     def _tilts(self, u) -> np.ndarray:
-        c = u.link_rotations[self._tilt_i] @ self._axis @ self._up
-        if self.p.vertical == "down":
-            c = -c
-        elif self.p.vertical == "line":
-            c = np.abs(c)
-        return np.arccos(np.clip(c, -1.0, 1.0))
+        return self._tilt.angles(u.link_rotations[self._tilt.rows] @ self._tilt.axis)
 
     def _climb(self, x, u) -> float:
         if x[STARTED] == 0.0:
@@ -121,9 +110,7 @@ class MobilityMonitor(Component[MobilityParams]):
         fail = worst > self.p.max_tilt
         y.failed[...] = float(fail or x[FAILED] > 0)
         if fail and self.p.stop_on_failure:
-            j = int(np.argmax(tilt))
-            self.stop(f"mobility failure: {self.tilt_names[j]} tilted {math.degrees(worst):.1f} deg from the "
-                      f"vertical ({self.p.vertical}), limit {math.degrees(self.p.max_tilt):.1f} deg", kind="mobility")
+            self.stop(self._tilt.failure(tilt, worst), kind="mobility")
         y.contact_made[...] = x[CONTACT]
         y.t_contact[...] = x[T_CONTACT] if x[CONTACT] else np.nan
         y.hold_time[...] = x[HOLD]

@@ -22,6 +22,7 @@ import numpy as np
 from pydantic import Field
 
 from snakesim.components.multibody.robot_model import RobotModel
+from snakesim.components.multibody.robot_ports import link_shape
 from snakesim.framework import Component, Input, Output, Params, Uses
 
 Vec3 = tuple[float, float, float]
@@ -35,8 +36,8 @@ class PlanarPoseParams(Params):
 class PlanarPose(Component[PlanarPoseParams]):
     type_name = "planar_pose"
     robot = Uses(RobotModel)
-    link_poses = Input(shape=lambda c: (c.robot.nl, 7), unit=None)
-    link_rotations = Input(shape=lambda c: (c.robot.nl, 3, 3), unit="1")
+    link_poses = Input(shape=link_shape(7), unit=None)
+    link_rotations = Input(shape=link_shape(3, 3), unit="1")
     pose = Output(shape=(3,), unit=None, feedthrough=True, names=("x", "y", "yaw"))
 
     def setup(self):

@@ -30,9 +30,12 @@ from pydantic import Field
 from snakesim.components.contact.body_samples import BodySampleOptions, body_samples
 from snakesim.components.multibody.pose_quaternions import rotation_matrices
 from snakesim.components.multibody.robot_model import RobotModel
+from snakesim.components.multibody.robot_ports import link_shape
 from snakesim.components.port_roles import LINK_POSES
 from snakesim.components.terrain.base import Terrain
 from snakesim.framework import Component, Input, Output, Params, Uses
+
+from .watch import RunningWorst, WorstSoFarOutput, require_rate
 
 
 class TerrainClearanceParams(Params):
@@ -44,26 +47,18 @@ class TerrainClearanceParams(Params):
     stop_on_intrusion: bool = Field(False, description="end the run when a link first goes inside")
 
 
-class _Deepest:
-    """Per-run scratch: the deepest depth per link and when the first link went inside."""
-
-    def __init__(self, nl: int):
-        self.depth = np.zeros(nl)
-        self.first: tuple[float, str, float] | None = None
-
-
-class TerrainClearance(Component[TerrainClearanceParams]):
+class TerrainClearance(WorstSoFarOutput, Component[TerrainClearanceParams]):
     type_name = "terrain_clearance"
+    WORST_OUTPUT = "max_depth"
     robot = Uses(RobotModel)
 
     terrain = Input(type=Terrain)
-    link_poses = Input(shape=lambda c: (c.robot.nl, 7), unit=None, role=LINK_POSES)
+    link_poses = Input(shape=link_shape(7), unit=None, role=LINK_POSES)
     max_depth = Output(shape=(), unit="m")
 
     def setup(self):
         p = self.p
-        if self.rate is None:
-            raise ValueError(f"{self.name}: terrain_clearance samples at a rate: give it `rate: HZ`")
+        require_rate(self)
         opts = BodySampleOptions(spacing=p.spacing, links=tuple(p.links), exclude=tuple(p.exclude),
                                  exclude_screws=p.exclude_screws)
         s = self.robot.derived(body_samples, opts)
@@ -73,13 +68,7 @@ class TerrainClearance(Component[TerrainClearanceParams]):
         self.watched = tuple(sorted({self.robot.links[i] for i in s.piece_link}, key=self.robot.links.index))
 
     def make_cache(self, x, u, y):
-        return _Deepest(self.robot.nl)
-
-    def discrete_state(self):
-        return np.zeros(1)
-
-    def output(self, t, x, u, y):
-        y.max_depth[...] = x[0]
+        return RunningWorst(self.robot.nl)       # worst: the deepest depth per link, m
 
     def update(self, t, xd, u):
         if not self._link.size:
@@ -89,14 +78,11 @@ class TerrainClearance(Component[TerrainClearanceParams]):
         world = poses[self._link, :3] + np.einsum("nij,nj->ni", R, self._points)
         depth = np.maximum(-u.terrain.distance(world), 0.0)
         w = u.cache
-        np.maximum.at(w.depth, self._link, depth)
-        xd[0] = float(w.depth.max())
-        if w.first is None and xd[0] > self.p.tolerance:
-            row = int(np.argmax(w.depth))
-            w.first = (t, self.robot.links[row], float(w.depth[row]))
-            if self.p.stop_on_intrusion:
-                self.stop(f"{self.robot.links[row]} is {1e3 * w.depth[row]:.1f} mm inside the terrain "
-                          f"(tolerance {1e3 * self.p.tolerance:.1f} mm; it has no contact model in this scene)")
+        np.maximum.at(w.worst, self._link, depth)
+        row = w.end_sample(t, xd, self.p.tolerance, self.robot.links, w.worst)
+        if row is not None and self.p.stop_on_intrusion:
+            self.stop(f"{self.robot.links[row]} is {1e3 * w.worst[row]:.1f} mm inside the terrain "
+                      f"(tolerance {1e3 * self.p.tolerance:.1f} mm; it has no contact model in this scene)")
 
     # -- the run's report (framework/run_reports.py) -------------------------------------------
     def report(self, cache, summary: dict) -> dict:
@@ -104,12 +90,10 @@ class TerrainClearance(Component[TerrainClearanceParams]):
         if cache is None:
             return {}
         tol = self.p.tolerance
-        rows = [i for i in np.argsort(-cache.depth) if cache.depth[i] > tol]
         r = {"tolerance_m": tol, "watched": list(self.watched),
-             "max_depth_m": float(cache.depth.max(initial=0.0)),
-             "inside": {self.robot.links[i]: float(cache.depth[i]) for i in rows}}
-        if cache.first is not None:
-            r["first"] = {"time_s": cache.first[0], "link": cache.first[1], "depth_m": cache.first[2]}
+             "max_depth_m": float(cache.worst.max(initial=0.0)),
+             "inside": {self.robot.links[i]: float(cache.worst[i]) for i in cache.over(tol)},
+             **cache.first_report("link", "depth_m")}
         return r
 
     @staticmethod

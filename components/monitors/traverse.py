@@ -26,8 +26,11 @@ from pydantic import Field
 
 from snakesim.components.monitors import reference_link
 from snakesim.components.multibody.robot_model import RobotModel
+from snakesim.components.multibody.robot_ports import link_shape
 from snakesim.components.port_roles import LINK_POSES
 from snakesim.framework import Component, Input, Output, Params, Uses
+
+from .watch import require_rate
 
 Vec3 = tuple[float, float, float]
 
@@ -55,14 +58,13 @@ class TraverseEvaluation(Component[TraverseEvaluationParams]):
     type_name = "traverse_evaluation"
     robot = Uses(RobotModel)
 
-    link_poses = Input(shape=lambda c: (c.robot.nl, 7), unit=None, role=LINK_POSES)
+    link_poses = Input(shape=link_shape(7), unit=None, role=LINK_POSES)
     distance = Output(shape=(), unit="m")
     lateral = Output(shape=(), unit="m")
 
     def setup(self):
         p = self.p
-        if self.rate is None:
-            raise ValueError(f"{self.name}: traverse_evaluation samples at a rate: give it `rate: HZ`")
+        require_rate(self)
         d = np.array(p.direction, float)
         if not np.linalg.norm(d) > 0:
             raise ValueError(f"{self.name}: direction needs a non-zero vector, got {p.direction}")

@@ -13,7 +13,7 @@ exactly those, sampled at its ``rate``, and reports them at the end of the run
                 within a band of width drift_tolerance (max h − min h <= tol over the interval),
                 found exactly by a sliding window (monotonic deques); held = t_b − t_a >= hold_time
     distance    from h_c: up = max(h − h_c), down = max(h_c − h), net = h − h_c (at the last sample)
-    failure     the mobility monitor's rule (components/monitors/mobility.py): θ_j between the
+    failure     the mobility monitor's rule (components/monitors/tilt.py): θ_j between the
                 body axis R_j·axis of each ``tilt_links`` link and the vertical (``vertical``
                 up/down/line) beyond max_tilt (60°); else the run's own stop reason if it stopped
                 early (another monitor, a stop condition, the integrator); else none
@@ -42,11 +42,14 @@ from typing import Literal
 import numpy as np
 from pydantic import Field
 
-from snakesim.components.control.joint_selection import match
 from snakesim.components.monitors import reference_link
 from snakesim.components.multibody.robot_model import RobotModel
+from snakesim.components.multibody.robot_ports import link_shape
 from snakesim.components.port_roles import LINK_POSES
 from snakesim.framework import Component, Input, Output, Params, Uses
+
+from .tilt import TiltRule
+from .watch import contact_hold_outputs, require_rate
 
 Vec3 = tuple[float, float, float]
 
@@ -61,16 +64,6 @@ def quat_axes(poses: np.ndarray, axis: np.ndarray) -> np.ndarray:
     w = poses[:, 6:7]
     t = 2.0 * np.cross(v, np.broadcast_to(axis, v.shape))
     return axis + w * t + np.cross(v, t)
-
-
-def tilt_from_vertical(axes: np.ndarray, up: np.ndarray, vertical: str) -> np.ndarray:
-    """The mobility monitor's angle (components/monitors/mobility.py) of unit body axes from the vertical."""
-    c = axes @ up
-    if vertical == "down":
-        c = -c
-    elif vertical == "line":
-        c = np.abs(c)
-    return np.arccos(np.clip(c, -1.0, 1.0))
 
 
 class VerticalMobilityParams(Params):
@@ -123,13 +116,10 @@ class VerticalMobilityEvaluation(Component[VerticalMobilityParams]):
     type_name = "vertical_mobility_evaluation"
     robot = Uses(RobotModel)
 
-    link_poses = Input(shape=lambda c: (c.robot.nl, 7), unit=None, role=LINK_POSES)
+    link_poses = Input(shape=link_shape(7), unit=None, role=LINK_POSES)
     normal_force = Input(shape=None, unit="N", default=0.0)
     tension = Input(shape=None, unit="N", default=np.nan)
-    contact_made = Output(shape=(), unit="1")
-    t_contact = Output(shape=(), unit="s", may_be_nan=True)
-    hold_time = Output(shape=(), unit="s")
-    max_hold_time = Output(shape=(), unit="s")
+    contact_made, t_contact, hold_time, max_hold_time = contact_hold_outputs()
     held = Output(shape=(), unit="1")
     climb = Output(shape=(), unit="m")
     max_up = Output(shape=(), unit="m")
@@ -139,16 +129,9 @@ class VerticalMobilityEvaluation(Component[VerticalMobilityParams]):
 
     def setup(self):
         p = self.p
-        if self.rate is None:
-            raise ValueError(f"{self.name}: vertical_mobility_evaluation samples at a rate: give it `rate: HZ`")
-        links = list(self.robot.links)
-        g, a = np.array(p.gravity, float), np.array(p.axis, float)
-        if not (np.linalg.norm(g) > 0 and np.linalg.norm(a) > 0):
-            raise ValueError(f"{self.name}: gravity and axis need a direction (non-zero), got {p.gravity}, {p.axis}")
-        self._up, self._axis = -g / np.linalg.norm(g), a / np.linalg.norm(a)
-        tilt_i = sorted({i for pat in p.tilt_links for i in match(links, pat, f"{self.name}: tilt_links")})
-        self._tilt_i = np.array(tilt_i, dtype=np.int64)
-        self.tilt_names = tuple(links[i] for i in tilt_i)
+        require_rate(self)
+        self._tilt = TiltRule(self.name, self.robot.links, p)
+        self._up, self.tilt_names = self._tilt.up, self._tilt.names
         self._ref, self.reference_name = reference_link(self, p.reference_link)
 
     def discrete_state(self):
@@ -158,8 +141,7 @@ class VerticalMobilityEvaluation(Component[VerticalMobilityParams]):
         return _Window()
 
     def _tilts(self, u) -> np.ndarray:
-        axes = quat_axes(np.asarray(u.link_poses)[self._tilt_i], self._axis)
-        return tilt_from_vertical(axes, self._up, self.p.vertical)
+        return self._tilt.angles(quat_axes(np.asarray(u.link_poses)[self._tilt.rows], self._tilt.axis))
 
     def output(self, t, x, u, y):
         y.contact_made[...] = x[CONTACT]
@@ -181,10 +163,8 @@ class VerticalMobilityEvaluation(Component[VerticalMobilityParams]):
         worst = float(tilt.max()) if tilt.size else 0.0
         xd[MAX_TILT] = max(xd[MAX_TILT], worst)
         if worst > p.max_tilt and not xd[FAILED]:
-            j = int(np.argmax(tilt))
             xd[FAILED], xd[T_FAIL] = 1.0, t
-            w.fail_reason = (f"mobility failure: {self.tilt_names[j]} tilted {math.degrees(worst):.1f} deg from the "
-                             f"vertical ({p.vertical}), limit {math.degrees(p.max_tilt):.1f} deg")
+            w.fail_reason = self._tilt.failure(tilt, worst)
             if p.stop_on_failure:
                 self.stop(w.fail_reason, kind="mobility")
         h = float(u.link_poses[self._ref, :3] @ self._up)

@@ -110,6 +110,7 @@ from .joint_stops import JointStopsParams, build as build_joint_stops
 from .lie_kernels import dexp_inv6, integrate_state, joint_layout
 from .linearization import mechanical_block
 from .robot_model import RobotModel, RobotSource
+from .robot_ports import joint_names, joint_shape, link_element_names, link_shape
 
 Vec3 = tuple[float, float, float]
 
@@ -145,12 +146,6 @@ class MultibodyParams(RobotSource):
                                                         "(blowup_guard.py; failure kind blow_up)")
 
 
-def _names(suffixes):
-    def f(c):
-        return tuple(f"{b}.{s}" for b in c.robot.links for s in suffixes)
-    return f
-
-
 SIX = ("vx", "vy", "vz", "wx", "wy", "wz")
 
 
@@ -159,25 +154,25 @@ class Multibody(Component[MultibodyParams]):
 
     robot = Provides(RobotModel, doc="the built robot: links, joints, frames, geometry, screws")
 
-    tau = Input(shape=lambda c: (c.robot.nj,), unit="N*m", default=0.0, names=lambda c: c.robot.joints)
-    wrenches = Input(shape=lambda c: (c.robot.nl, 6), unit=None, default=0.0,
-                     names=_names(("fx", "fy", "fz", "tx", "ty", "tz")))
+    tau = Input(shape=joint_shape, unit="N*m", default=0.0, names=joint_names)
+    wrenches = Input(shape=link_shape(6), unit=None, default=0.0,
+                     names=link_element_names(("fx", "fy", "fz", "tx", "ty", "tz")))
     gravity = Input(shape=lambda c: (1,) if c.p.gravity_input == "scale" else (3,), unit=None, default=np.nan)
 
     q = Output(shape=lambda c: (c.robot.nq,), unit=None, feedthrough=(), calc="calc_state",
                names=lambda c: c.robot.q_names)
     v = Output(shape=lambda c: (c.robot.nv,), unit=None, feedthrough=(), calc="calc_state",
                names=lambda c: c.robot.v_names)
-    joint_q = Output(shape=lambda c: (c.robot.nj,), unit="rad", feedthrough=(), calc="calc_state",
-                     names=lambda c: c.robot.joints, role=JOINT_POSITIONS)
-    joint_v = Output(shape=lambda c: (c.robot.nj,), unit="rad/s", feedthrough=(), calc="calc_state",
-                     names=lambda c: c.robot.joints, role=JOINT_VELOCITIES)
-    link_poses = Output(shape=lambda c: (c.robot.nl, 7), unit=None, feedthrough=(), calc="calc_state",
-                        names=_names(("x", "y", "z", "qx", "qy", "qz", "qw")), role=LINK_POSES)
-    link_rotations = Output(shape=lambda c: (c.robot.nl, 3, 3), unit="1", feedthrough=(), calc="calc_state",
-                            names=_names(tuple(f"r{i}{j}" for i in range(3) for j in range(3))))
-    link_velocities = Output(shape=lambda c: (c.robot.nl, 6), unit=None, feedthrough=(), calc="calc_state",
-                             names=_names(SIX), role=LINK_VELOCITIES)
+    joint_q = Output(shape=joint_shape, unit="rad", feedthrough=(), calc="calc_state",
+                     names=joint_names, role=JOINT_POSITIONS)
+    joint_v = Output(shape=joint_shape, unit="rad/s", feedthrough=(), calc="calc_state",
+                     names=joint_names, role=JOINT_VELOCITIES)
+    link_poses = Output(shape=link_shape(7), unit=None, feedthrough=(), calc="calc_state",
+                        names=link_element_names(("x", "y", "z", "qx", "qy", "qz", "qw")), role=LINK_POSES)
+    link_rotations = Output(shape=link_shape(3, 3), unit="1", feedthrough=(), calc="calc_state",
+                            names=link_element_names(tuple(f"r{i}{j}" for i in range(3) for j in range(3))))
+    link_velocities = Output(shape=link_shape(6), unit=None, feedthrough=(), calc="calc_state",
+                             names=link_element_names(SIX), role=LINK_VELOCITIES)
     # their own group: read by recorders and stop conditions, not by the derivatives' inputs, so
     # integrator stages (the continuous closure) skip them
     momentum = Output(shape=(6,), unit=None, feedthrough=(), calc="calc_momentum",
@@ -185,10 +180,10 @@ class Multibody(Component[MultibodyParams]):
     com = Output(shape=(3,), unit="m", feedthrough=(), calc="calc_momentum", names=("x", "y", "z"))
     energy = Output(shape=(2,), unit="J", feedthrough=("gravity",), calc="calc_energy", names=("kinetic", "potential"))
     a = Output(shape=lambda c: (c.robot.nv,), unit=None, feedthrough=True, names=lambda c: c.robot.v_names)
-    link_accelerations = Output(shape=lambda c: (c.robot.nl, 6), unit=None, feedthrough=True,
-                                names=_names(("ax", "ay", "az", "alphax", "alphay", "alphaz")))
-    joint_wrenches = Output(shape=lambda c: (c.robot.nl, 6), unit=None, feedthrough=True,
-                            names=_names(("fx", "fy", "fz", "tx", "ty", "tz")), role=JOINT_WRENCHES)
+    link_accelerations = Output(shape=link_shape(6), unit=None, feedthrough=True,
+                                names=link_element_names(("ax", "ay", "az", "alphax", "alphay", "alphaz")))
+    joint_wrenches = Output(shape=link_shape(6), unit=None, feedthrough=True,
+                            names=link_element_names(("fx", "fy", "fz", "tx", "ty", "tz")), role=JOINT_WRENCHES)
 
     # -- set-up ------------------------------------------------------------------------
     def setup(self):

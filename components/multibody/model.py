@@ -248,24 +248,26 @@ def build_pin_model(tree: LinkTree, mimic: bool, fixed: str = "merge") -> pin.Mo
         frame_of[j.name] = qrot
         head[j.name] = j.child
     names = {j.name for j in body_joints}
+
+    def placed(link: str):
+        """(the body joint carrying ``link``: the first one up the tree that is not merged away, None for
+        the root body; the link frame in that joint's Pinocchio frame)."""
+        h = link
+        while h in tree.parent_joint and tree.parent_joint[h].name not in names:
+            h = tree.parent_joint[h].parent
+        owner = tree.parent_joint[h].name if h in tree.parent_joint else None
+        r, p = tree.placement_in(h, link)
+        qp = frame_of[owner].T
+        return owner, pin.SE3(qp @ r, qp @ p)
+
     for link in tree.links:
         if link.mass <= 0.0 and not np.any(link.inertia):
             continue
-        h = link.name
-        while h in tree.parent_joint and tree.parent_joint[h].name not in names:
-            h = tree.parent_joint[h].parent
-        owner = tree.parent_joint[h].name if h in tree.parent_joint else None
-        r, p = tree.placement_in(h, link.name)
-        qp = frame_of[owner].T
-        model.appendBodyToJoint(jid[owner], pin.Inertia(link.mass, link.com, link.inertia), pin.SE3(qp @ r, qp @ p))
+        owner, placement = placed(link.name)
+        model.appendBodyToJoint(jid[owner], pin.Inertia(link.mass, link.com, link.inertia), placement)
     for link in tree.links:
-        h = link.name
-        while h in tree.parent_joint and tree.parent_joint[h].name not in names:
-            h = tree.parent_joint[h].parent
-        owner = tree.parent_joint[h].name if h in tree.parent_joint else None
-        r, p = tree.placement_in(h, link.name)
-        qp = frame_of[owner].T
-        model.addFrame(pin.Frame(link.name, jid[owner], jframe[owner], pin.SE3(qp @ r, qp @ p), pin.FrameType.BODY))
+        owner, placement = placed(link.name)
+        model.addFrame(pin.Frame(link.name, jid[owner], jframe[owner], placement, pin.FrameType.BODY))
     if mimic:
         for j in tree.joints:
             if j.mimic is not None:

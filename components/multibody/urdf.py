@@ -198,14 +198,24 @@ def _check_inertia(where: str, mass: float, vals: dict, i_local: np.ndarray) -> 
             f"{', '.join(f'{m:.6g}' for m in moments)} need I1 + I2 >= I3 (no mass distribution has these)")
 
 
-def parse_urdf(text: str, source: str = "<urdf text>") -> LinkTree:
+def robot_element(text: str, source: str, error: type[Exception] = MultibodyModelError) -> ET.Element:
+    """The ``<robot>`` root of URDF ``text``: the one XML read for the simulator's parse and the
+    structure check (snakesim.robots.structure). Malformed XML or another root element raises
+    ``error`` naming ``source`` (and the line and column)."""
     try:
         robot = ET.fromstring(text)
     except ET.ParseError as e:
         line, col = e.position
-        raise MultibodyModelError(f"{source}:{line}:{col}: malformed XML ({e})") from None
+        # ParseError's message ends with ": line L, column C", already in the prefix
+        reason = str(e).rsplit(": line ", 1)[0]
+        raise error(f"{source}:{line}:{col}: malformed XML: {reason}") from None
     if robot.tag != "robot":
-        raise MultibodyModelError(f"{source}: root element is <{robot.tag}>, a URDF needs <robot>")
+        raise error(f"{source}: root element is <{robot.tag}>, a URDF needs <robot>")
+    return robot
+
+
+def parse_urdf(text: str, source: str = "<urdf text>") -> LinkTree:
+    robot = robot_element(text, source)
 
     links: list[Link] = []
     seen: set[str] = set()

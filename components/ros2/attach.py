@@ -134,14 +134,10 @@ def attach_sim_control(resolved: Resolved, params: dict | None = None, registry=
     the robot is a multibody) at the command source's rate; update its params. Its name."""
     from snakesim.framework.registry import default_registry
 
-    existing = _existing(resolved, SIM_CONTROL)
+    existing = _update_existing(resolved, SIM_CONTROL, params)
     if existing is not None:
-        spec = resolved.components[existing]
-        resolved.components[existing] = spec.model_copy(update={"params": {**spec.params, **(params or {})}})
         return existing
-    name, k = SIM_CONTROL, 1
-    while name in resolved.components:
-        name, k = f"{SIM_CONTROL}_{k}", k + 1
+    name = _free_name(resolved, SIM_CONTROL)
     rate = 1.0 / (nearest_period(COMMANDS_RATE, resolved.sim.dt) * resolved.sim.dt)
     prm, uses = dict(params or {}), {}
     robot = _multibody(resolved, registry or default_registry())
@@ -158,10 +154,8 @@ def attach_tether_commands(resolved: Resolved, registry=None, params: dict | Non
     from snakesim.components.tethers import Tethers
     from snakesim.framework.registry import default_registry
 
-    existing = _existing(resolved, TETHER_COMMANDS)
+    existing = _update_existing(resolved, TETHER_COMMANDS, params)
     if existing is not None:
-        spec = resolved.components[existing]
-        resolved.components[existing] = spec.model_copy(update={"params": {**spec.params, **(params or {})}})
         return existing
     into = {d for _s, d, _w in resolved.connections}
     for comp, spec, cls in (registry or default_registry()).classes_in(resolved):
@@ -170,9 +164,7 @@ def attach_tether_commands(resolved: Resolved, registry=None, params: dict | Non
         prm = _params(cls, spec)
         if prm is None:
             continue
-        name, k = TETHER_COMMANDS, 1
-        while name in resolved.components:
-            name, k = f"{TETHER_COMMANDS}_{k}", k + 1
+        name = _free_name(resolved, TETHER_COMMANDS)
         rate = 1.0 / (nearest_period(COMMANDS_RATE, resolved.sim.dt) * resolved.sim.dt)
         resolved.components[name] = ComponentSpec(type=TETHER_COMMANDS, rate=rate,
                                                   params={**(params or {}), "tethers": len(prm.tethers)})
@@ -216,10 +208,8 @@ def _attach_parameter_commands(resolved: Resolved, registry, params: dict | None
     from snakesim.framework.registry import default_registry
 
     type_name = source.type_name
-    existing = _existing(resolved, type_name)
+    existing = _update_existing(resolved, type_name, params)
     if existing is not None:
-        spec = resolved.components[existing]
-        resolved.components[existing] = spec.model_copy(update={"params": {**spec.params, **(params or {})}})
         return existing
     into = {d for _s, d, _w in resolved.connections}
     for comp, _spec, cls in (registry or default_registry()).classes_in(resolved):
@@ -228,9 +218,7 @@ def _attach_parameter_commands(resolved: Resolved, registry, params: dict | None
         free = [k for k in source.PARAMETERS if k in cls.inputs and f"{comp}.{k}" not in into]
         if not free:
             continue
-        name, k = type_name, 1
-        while name in resolved.components:
-            name, k = f"{type_name}_{k}", k + 1
+        name = _free_name(resolved, type_name)
         rate = 1.0 / (nearest_period(COMMANDS_RATE, resolved.sim.dt) * resolved.sim.dt)
         resolved.components[name] = ComponentSpec(type=type_name, rate=rate, params=dict(params or {}))
         resolved.connections.extend((f"{name}.{k}", f"{comp}.{k}", "--ros2") for k in free)
@@ -248,10 +236,8 @@ def attach_sensor_bridge(resolved: Resolved, registry=None, params: dict | None 
     from snakesim.components.port_roles import CAMERA_FRAME, LIDAR_SCAN
     from snakesim.framework.registry import default_registry
 
-    existing = _existing(resolved, SENSOR_BRIDGE)
+    existing = _update_existing(resolved, SENSOR_BRIDGE, params)
     if existing is not None:
-        spec = resolved.components[existing]
-        resolved.components[existing] = spec.model_copy(update={"params": {**spec.params, **(params or {})}})
         return existing
     refs, bases, rates = [], [], []
     for comp, spec, cls in (registry or default_registry()).classes_in(resolved):
@@ -263,9 +249,7 @@ def attach_sensor_bridge(resolved: Resolved, registry=None, params: dict | None 
             rates.append(spec.rate)
     if not refs:
         return None
-    name, k = SENSOR_BRIDGE, 1
-    while name in resolved.components:
-        name, k = f"{SENSOR_BRIDGE}_{k}", k + 1
+    name = _free_name(resolved, SENSOR_BRIDGE)
     fastest = max(rates, default=COMMANDS_RATE)
     rate = 1.0 / (nearest_period(fastest, resolved.sim.dt) * resolved.sim.dt)
     resolved.components[name] = ComponentSpec(type=SENSOR_BRIDGE, rate=rate,
@@ -288,9 +272,7 @@ def _attach_publisher(resolved: Resolved, registry=None, params: dict | None = N
                                                       rate=spec.rate, uses=spec.uses)
         return existing
     registry = registry or default_registry()
-    name, k = NAME, 1
-    while name in resolved.components:
-        name, k = f"{NAME}_{k}", k + 1
+    name = _free_name(resolved, NAME)
     sink: dict = {}
     uses: dict = {}
     conns: list[tuple[str, str]] = []
@@ -333,8 +315,27 @@ def _attach_publisher(resolved: Resolved, registry=None, params: dict | None = N
 
 
 def _existing(resolved: Resolved, type_name: str):
+    """The name of the ``type_name`` component ``--ros2`` added already, or None."""
     return next((n for n, s in resolved.components.items()
                  if s.type == type_name and resolved.where.get(n) == "--ros2"), None)
+
+
+def _update_existing(resolved: Resolved, type_name: str, params: dict | None) -> str | None:
+    """The ``type_name`` component ``--ros2`` added already, its params updated with ``params`` (an attach
+    called again adds nothing twice); None when there is none."""
+    existing = _existing(resolved, type_name)
+    if existing is not None:
+        spec = resolved.components[existing]
+        resolved.components[existing] = spec.model_copy(update={"params": {**spec.params, **(params or {})}})
+    return existing
+
+
+def _free_name(resolved: Resolved, base: str) -> str:
+    """``base``, or ``base_1``, ``base_2``, ... : the first name no component of the scene has."""
+    name, k = base, 1
+    while name in resolved.components:
+        name, k = f"{base}_{k}", k + 1
+    return name
 
 
 def attach_commands(resolved: Resolved, registry=None, params: dict | None = None,
@@ -370,9 +371,7 @@ def attach_commands(resolved: Resolved, registry=None, params: dict | None = Non
         return None
     name = existing
     if name is None:
-        name, k = COMMANDS, 1
-        while name in resolved.components:
-            name, k = f"{COMMANDS}_{k}", k + 1
+        name = _free_name(resolved, COMMANDS)
     into = {d for s, d, _ in resolved.connections if not s.startswith(f"{name}.")}
     conns: list[tuple[str, str]] = []
     cmd: dict = {}

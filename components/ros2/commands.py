@@ -82,10 +82,13 @@ from pydantic import Field
 
 from snakesim.components.control.joint_selection import per_joint
 from snakesim.components.control.pid import DEFAULT_GAINS, Mode
+from snakesim.components.control.setpoint_ports import setpoint_outputs
 from snakesim.components.multibody.robot_model import RobotModel
+from snakesim.components.multibody.robot_ports import joint_shape
 from snakesim.components.port_roles import JOINT_POSITIONS
 from snakesim.framework import Component, Input, Output, Uses
 
+from .rejection_counts import count_rejection
 from .rejections import Rejected, RejectionLog, check_stamp
 from .transport import DdsEndpoint
 
@@ -112,21 +115,12 @@ class Ros2CommandsParams(DdsEndpoint):
     max_abs_velocity: float = Field(50.0, gt=0, description="rad/s; larger |velocity| is out of range")
 
 
-def _nj(c):
-    return (c.robot.nj,)
-
-
-def _joints(c):
-    return c.robot.joints
-
-
 class Ros2Commands(Component[Ros2CommandsParams]):
     type_name = "ros2_commands"
     robot = Uses(RobotModel)
 
-    q = Input(shape=_nj, unit="rad", default=np.nan, role=JOINT_POSITIONS)
-    setpoint = Output(shape=_nj, unit=None, feedthrough=("q",), names=_joints)
-    rate = Output(shape=_nj, unit="rad/s", feedthrough=("q",), names=_joints)
+    q = Input(shape=joint_shape, unit="rad", default=np.nan, role=JOINT_POSITIONS)
+    setpoint, rate = setpoint_outputs(("q",))
     gravity = Output(shape=(1,), unit=None, feedthrough=(), may_be_nan=True)
     rejected = Output(shape=(1,), unit="1", feedthrough=())
     applied = Output(shape=(1,), unit="1", feedthrough=())
@@ -291,12 +285,7 @@ class Ros2Commands(Component[Ros2CommandsParams]):
         try:
             what = self.validate(topic, msg, t)
         except Rejected as e:
-            run.rejected += 1
-            run.last_reason = str(e)
-            y.rejected[0] = run.rejected
-            if run.log is None:
-                run.log = RejectionLog(self.name)
-            run.log(t, e)
+            count_rejection(run, self.name, t, e, y.rejected)
             return False
         if what[0] == "gravity":
             y.gravity[0] = what[1]

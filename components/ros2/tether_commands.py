@@ -39,7 +39,8 @@ from pydantic import Field
 from snakesim.framework import Component, Output
 
 from .command_reader import CommandReaderRun
-from .rejections import Rejected, RejectionLog
+from .rejection_counts import count_rejection
+from .rejections import Rejected
 from .transport import DdsEndpoint
 
 TETHER_TOPIC = "/tethers/attached"
@@ -91,12 +92,7 @@ class Ros2TetherCommands(Component[Ros2TetherCommandsParams]):
             try:
                 y.attached[:] = self.validate(m)
             except Rejected as e:
-                run.rejected += 1
-                run.last_reason = str(e)
-                y.rejected[0] = run.rejected
-                if run.log is None:
-                    run.log = RejectionLog(self.name)
-                run.log(t, e)
+                count_rejection(run, self.name, t, e, y.rejected)
                 continue
             run.applied += 1
             y.applied[0] = run.applied

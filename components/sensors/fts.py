@@ -38,6 +38,7 @@ from pydantic import Field
 
 from snakesim.components.control.joint_selection import per_joint
 from snakesim.components.multibody.robot_model import RobotModel
+from snakesim.components.multibody.robot_ports import link_shape
 from snakesim.framework import Component, Input, Output, Params, Uses
 from snakesim.components.port_roles import JOINT_WRENCHES, SENSOR_WRENCHES
 
@@ -61,7 +62,7 @@ class ForceTorqueSensors(Component[FtsParams]):
     type_name = "force_torque_sensors"
     robot = Uses(RobotModel)
 
-    joint_wrenches = Input(shape=lambda c: (c.robot.nl, 6), unit=None, role=JOINT_WRENCHES)
+    joint_wrenches = Input(shape=link_shape(6), unit=None, role=JOINT_WRENCHES)
     wrench = Output(shape=lambda c: (len(c.sensor_names), 6), unit=None, feedthrough=True,
                     names=lambda c: tuple(f"{s}.{a}" for s in c.sensor_names for a in AXES), role=SENSOR_WRENCHES)
 

@@ -35,6 +35,7 @@ from pydantic import Field
 
 from snakesim.components.multibody.pose_quaternions import rotation_matrices
 from snakesim.components.multibody.robot_model import RobotModel
+from snakesim.components.multibody.robot_ports import link_shape
 from snakesim.components.port_roles import LINK_POSES
 from snakesim.framework import Component, Input, Output, Params, Uses
 
@@ -55,7 +56,7 @@ class FtsWallLoads(Component[FtsWallLoadsParams]):
     robot = Uses(RobotModel)
 
     wrench = Input(shape=lambda c: (len(c.sensor_links), 6), unit=None)
-    link_poses = Input(shape=lambda c: (c.robot.nl, 7), unit=None, role=LINK_POSES)
+    link_poses = Input(shape=link_shape(7), unit=None, role=LINK_POSES)
     loads = Output(shape=lambda c: (len(c.sensor_links) + 1,), unit="N", feedthrough=True)
     forces = Output(shape=lambda c: (len(c.sensor_links) + 1, 3), unit="N", feedthrough=True)
 

@@ -26,6 +26,7 @@ from pydantic import Field
 
 from snakesim.components.control.joint_selection import match
 from snakesim.components.multibody.robot_model import RobotModel
+from snakesim.components.multibody.robot_ports import link_shape
 from snakesim.framework import Component, Input, Output, Params, Uses
 from snakesim.components.port_roles import IMU_ANGULAR_RATE, IMU_ORIENTATION, IMU_SPECIFIC_FORCE
 
@@ -45,18 +46,14 @@ class ImuParams(Params):
     seed: int = Field(0, ge=0, description="noise seed")
 
 
-def _nl(*tail):
-    return lambda c: (c.robot.nl, *tail)
-
-
 class Imu(Component[ImuParams]):
     type_name = "imu"
     robot = Uses(RobotModel)
 
-    link_rotations = Input(shape=_nl(3, 3), unit="1")
-    link_poses = Input(shape=_nl(7), unit=None)
-    link_velocities = Input(shape=_nl(6), unit=None)
-    link_accelerations = Input(shape=_nl(6), unit=None)
+    link_rotations = Input(shape=link_shape(3, 3), unit="1")
+    link_poses = Input(shape=link_shape(7), unit=None)
+    link_velocities = Input(shape=link_shape(6), unit=None)
+    link_accelerations = Input(shape=link_shape(6), unit=None)
     gravity = Input(shape=(1,), unit=None, default=np.nan)
     angular_rate = Output(shape=(3,), unit="rad/s", feedthrough=True, names=("x", "y", "z"), role=IMU_ANGULAR_RATE)
     specific_force = Output(shape=(3,), unit="m/s**2", feedthrough=True, names=("x", "y", "z"), role=IMU_SPECIFIC_FORCE)

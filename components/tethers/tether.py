@@ -31,6 +31,7 @@ import numpy as np
 from pydantic import ConfigDict, Field
 
 from snakesim.components.multibody.robot_model import RobotModel
+from snakesim.components.multibody.robot_ports import link_shape
 from snakesim.framework import Component, Input, Output, Params, Uses
 
 Vec3 = tuple[float, float, float]
@@ -64,8 +65,8 @@ class Tethers(Component[TetherParams]):
     type_name = "tethers"
     robot = Uses(RobotModel)
 
-    link_rotations = Input(shape=lambda c: (c.robot.nl, 3, 3), unit="1")
-    link_poses = Input(shape=lambda c: (c.robot.nl, 7), unit=None)
+    link_rotations = Input(shape=link_shape(3, 3), unit="1")
+    link_poses = Input(shape=link_shape(7), unit=None)
     link_velocities = Input(shape=_nl6, unit=None)
     attached = Input(shape=_n, unit="1", default=np.nan)
     wrenches = Output(shape=_nl6, unit=None, feedthrough=("link_rotations", "link_poses", "link_velocities",
