@@ -65,6 +65,19 @@ def lu_factor(a, piv):
     return True
 
 
+@njit(cache=True, inline="always")
+def _first_order_entry(col, q0, nv, c, c2, g, p):
+    """One term of the first-order states' share −c² G_F D (P_v + c P_q) of an owner's reduced matrix
+    (c2 = c²): for P's entry p at state column ``col`` and g = (G_F D)'s entry on its row, the reduced
+    matrix's column j and the amount w subtracted there (c³ g p on a q column, c² g p on a v column);
+    j = −1 for a column outside the owner."""
+    if q0 <= col < q0 + nv:
+        return col - q0, c2 * c * g * p
+    if q0 + nv <= col < q0 + 2 * nv:
+        return col - q0 - nv, c2 * g * p
+    return -1, 0.0
+
+
 @njit(cache=True)
 def reduced_matrix(W, M, Gq, Gv, c, q0, nv, Dinv, gf_r, gf_c, gf_v, p_ptr, p_c, p_v):
     """W = M − c G_v − c² G_q − c² G_F D (P_v + c P_q): the owner's reduced (nv × nv) matrix
@@ -77,11 +90,9 @@ def reduced_matrix(W, M, Gq, Gv, c, q0, nv, Dinv, gf_r, gf_c, gf_v, p_ptr, p_c, 
         f = gf_c[a]
         g = gf_v[a] * Dinv[f]
         for b in range(p_ptr[f], p_ptr[f + 1]):
-            col = p_c[b]
-            if q0 <= col < q0 + nv:
-                W[gf_r[a], col - q0] -= c2 * c * g * p_v[b]
-            elif q0 + nv <= col < q0 + 2 * nv:
-                W[gf_r[a], col - q0 - nv] -= c2 * g * p_v[b]
+            j, w = _first_order_entry(p_c[b], q0, nv, c, c2, g, p_v[b])
+            if j >= 0:
+                W[gf_r[a], j] -= w
 
 
 @njit(cache=True)
@@ -127,14 +138,8 @@ def reduced_diagonal(out, c, q0, nv, Dinv, gf_r, gf_c, gf_v, p_ptr, p_c, p_v):
         f = gf_c[a]
         g = gf_v[a] * Dinv[f]
         for b in range(p_ptr[f], p_ptr[f + 1]):
-            col = p_c[b]
-            if q0 <= col < q0 + nv:
-                j, w = col - q0, c2 * c * g * p_v[b]
-            elif q0 + nv <= col < q0 + 2 * nv:
-                j, w = col - q0 - nv, c2 * g * p_v[b]
-            else:
-                continue
-            if w == 0.0:
+            j, w = _first_order_entry(p_c[b], q0, nv, c, c2, g, p_v[b])
+            if j < 0 or w == 0.0:
                 continue
             if j != gf_r[a]:
                 return False

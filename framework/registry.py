@@ -146,21 +146,21 @@ class Registry:
                                 "the name is ambiguous; uninstall or rename one of them")
 
     # -- look-ups -----------------------------------------------------------------
-    def component(self, name: str) -> type[Component]:
-        self._clashed("component type", name)
+    def _look_up(self, kind: str, table: dict, name: str, listing) -> type:
+        """``table[name]``; an ambiguous name (:meth:`_clashed`) or an unknown one (with the close names and
+        ``listing(table)``, where to find the rest) raises, naming the ``kind``."""
+        self._clashed(kind, name)
         try:
-            return self.components[name]
+            return table[name]
         except KeyError:
-            raise RegistryError(f"unknown component type '{name}'{_close(name, self.components)} "
-                                f"(`snakesim components` lists all {len(self.components)})") from None
+            raise RegistryError(f"unknown {kind} '{name}'{_close(name, table)}{listing(table)}") from None
+
+    def component(self, name: str) -> type[Component]:
+        return self._look_up("component type", self.components, name,
+                             lambda t: f" (`snakesim components` lists all {len(t)})")
 
     def integrator(self, name: str) -> type:
-        self._clashed("integrator", name)
-        try:
-            return self.integrators[name]
-        except KeyError:
-            raise RegistryError(f"unknown integrator '{name}'{_close(name, self.integrators)}; "
-                                f"valid: {', '.join(sorted(self.integrators))}") from None
+        return self._look_up("integrator", self.integrators, name, lambda t: f"; valid: {', '.join(sorted(t))}")
 
     def classes_in(self, resolved):
         """(name, spec, class) of each component of a resolved configuration whose type is registered;
