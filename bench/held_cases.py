@@ -20,13 +20,13 @@ from __future__ import annotations
 
 import math
 import sys
-import textwrap
 import time
 from pathlib import Path
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "validation"))
+from screw_scenes import downhill, held_on_slope  # noqa: E402
 from validation_scenes import run  # noqa: E402
 
 from snakesim.framework.session import load_session  # noqa: E402
@@ -40,33 +40,9 @@ def _integrator(spec: dict) -> dict:
 
 def slope_case(spec: dict, dt: float, tmp: Path) -> dict:
     theta = math.radians(4.0)
-    n = np.array([-math.sin(theta), 0.0, math.cos(theta)]) * 0.0898
-    quat = [0.0, math.sin(-theta / 2), 0.0, math.cos(-theta / 2)]
-    text = f"""
-    sim: {{duration: 2.0, dt: {dt}, record_rate: 50}}
-    components:
-      terrain: {{type: terrain, params: {{spec: {{kind: plane, tilt: {theta},
-                materials: [{{name: ice, k: 1.0e5, c: 1.0e3, mu: 0.1}}]}}}}}}
-      robot: {{type: multibody, params: {{design: eels-1.0, modules: 2, head: false,
-              base_position: [{n[0]}, 0.0, {n[2]}], base_quaternion: {quat}}}}}
-      drive: {{type: screw_drive, params: {{omega: 0.0}}}}
-      contact: {{type: screw_sdf_contact, params: {{material: {{ev_a: 4.0}}}}}}
-    connections:
-      - terrain.terrain -> contact.terrain
-      - robot.link_poses -> contact.link_poses
-      - robot.link_velocities -> contact.link_velocities
-      - robot.joint_v -> contact.joint_v, drive.joint_v
-      - robot.joint_q -> drive.joint_q
-      - drive.tau -> robot.tau
-      - contact.wrenches -> robot.wrenches
-    record: [robot.com]
-    """
-    path = tmp / "held-slope.yaml"
-    path.write_text(textwrap.dedent(text).lstrip("\n"))
-    s = load_session(path, sim_overrides={"integrator": _integrator(spec)})
-    r = s.run()
-    t, com = np.asarray(r["t"]), np.asarray(r["robot.com"])
-    down = -(com[:, 0] * math.cos(theta) + com[:, 2] * math.sin(theta))
+    r = held_on_slope(theta=theta, mu=0.1, ev_a=4.0, duration=2.0, dt=dt, integrator=_integrator(spec),
+                      record_rate=50).run()
+    t, down = np.asarray(r["t"]), downhill(r["robot.com"], theta)
     late = t >= 1.0
     return {"creep_m_s": float(np.polyfit(t[late], down[late], 1)[0]), "rtf": r.summary["real_time_factor"],
             "completed": r.summary["completed"]}

@@ -13,7 +13,8 @@ Robots are eels-1.0 with 2 modules, no head; the screws held by screw_drive's ve
 from __future__ import annotations
 
 import math
-import textwrap
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -22,43 +23,18 @@ from snakesim.framework.session import load_session
 
 from jacobian_check import analytic_and_fd_jacobian
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "validation"))
+from screw_scenes import downhill, held_on_slope  # noqa: E402
+
 G = 9.81
 
 
-def _on_slope(theta, r=0.0898):
-    """Base pose lying along the fall line (+x rises), axis tilted up by θ, screws touching."""
-    n = np.array([-math.sin(theta), 0.0, math.cos(theta)])
-    pos = r * n
-    quat = [0.0, math.sin(-theta / 2), 0.0, math.cos(-theta / 2)]
-    return f"base_position: [{pos[0]}, {pos[1]}, {pos[2]}], base_quaternion: {quat}"
-
-
-def slope_run(tmp_path, *, theta, mu, ev_a, integrator, dt, duration):
-    """Downhill distance s(t) of the centre of mass and the run's summary."""
-    text = f"""
-    sim: {{duration: {duration}, dt: {dt}, integrator: {integrator}, record_rate: 100}}
-    components:
-      terrain: {{type: terrain, params: {{spec: {{kind: plane, tilt: {theta},
-                materials: [{{name: ice, k: 1.0e5, c: 1.0e3, mu: {mu}}}]}}}}}}
-      robot: {{type: multibody, params: {{design: eels-1.0, modules: 2, head: false, {_on_slope(theta)}}}}}
-      drive: {{type: screw_drive, params: {{omega: 0.0}}}}
-      contact: {{type: screw_sdf_contact, params: {{material: {{ev_a: {ev_a}}}}}}}
-    connections:
-      - terrain.terrain -> contact.terrain
-      - robot.link_poses -> contact.link_poses
-      - robot.link_velocities -> contact.link_velocities
-      - robot.joint_v -> contact.joint_v, drive.joint_v
-      - robot.joint_q -> drive.joint_q
-      - drive.tau -> robot.tau
-      - contact.wrenches -> robot.wrenches
-    record: [robot.com]
-    """
-    path = tmp_path / f"slope-{integrator}-{dt:g}.yaml"
-    path.write_text(textwrap.dedent(text).lstrip("\n"))
-    r = load_session(path).run()
+def slope_run(*, theta, mu, ev_a, integrator, dt, duration):
+    """Downhill distance s(t) of the centre of mass."""
+    r = held_on_slope(theta=theta, mu=mu, ev_a=ev_a, duration=duration, dt=dt, integrator=integrator,
+                      record_rate=100).run()
     assert r.summary["completed"], r.summary
-    com = np.asarray(r["robot.com"])
-    return np.asarray(r["t"]), -(com[:, 0] * math.cos(theta) + com[:, 2] * math.sin(theta))
+    return np.asarray(r["t"]), downhill(r["robot.com"], theta)
 
 
 def creep_rate(t, s):
@@ -89,39 +65,39 @@ def test_jacobian_matches_finite_differences_in_the_default_scene():
 
 
 @pytest.fixture(scope="module")
-def converged_creep(tmp_path_factory):
+def converged_creep():
     """The held pair's creep at RK4, 0.1 ms (converged: 0.05 ms changes it by < 1e-3 relative)."""
-    t, s = slope_run(tmp_path_factory.mktemp("ref"), theta=math.radians(4.0), mu=0.1, ev_a=4.0,
+    t, s = slope_run(theta=math.radians(4.0), mu=0.1, ev_a=4.0,
                      integrator="rk4", dt=1e-4, duration=2.0)
     return creep_rate(t, s)
 
 
 @pytest.mark.parametrize("dt", [5e-3, 1e-2])
-def test_held_anisotropic_pair_creeps_at_the_converged_rate(tmp_path, converged_creep, dt):
+def test_held_anisotropic_pair_creeps_at_the_converged_rate(converged_creep, dt):
     """4° slope, μ = 0.1, thread anisotropy ‖e_v‖ = 4: friction holds the robot but for the
     regularisation's creep (~0.24 mm/s here). The held screws' spin is the stiff mode: the
     friction slope μ F_n ‖e_v‖ r² / (v_ε I) against a damper-only servo. rosenbrock_w at the
     production step keeps the creep within 10 % of the converged value."""
     assert 1e-4 < converged_creep < 1e-3           # creeping, not sliding (tan θ / μ = 0.7)
-    t, s = slope_run(tmp_path, theta=math.radians(4.0), mu=0.1, ev_a=4.0, integrator="rosenbrock_w", dt=dt,
+    t, s = slope_run(theta=math.radians(4.0), mu=0.1, ev_a=4.0, integrator="rosenbrock_w", dt=dt,
                      duration=2.0)
     assert creep_rate(t, s) == pytest.approx(converged_creep, rel=0.1)
 
 
-def test_explicit_rk4_at_the_production_step_misses_the_creep(tmp_path, converged_creep):
+def test_explicit_rk4_at_the_production_step_misses_the_creep(converged_creep):
     """Why the implicit step: RK4 at 1 ms settles on a faster creep (its stability limit 2.8/h is
     below the spin's friction rate), more than the 10 % the implicit step keeps to."""
-    t, s = slope_run(tmp_path, theta=math.radians(4.0), mu=0.1, ev_a=4.0, integrator="rk4", dt=1e-3,
+    t, s = slope_run(theta=math.radians(4.0), mu=0.1, ev_a=4.0, integrator="rk4", dt=1e-3,
                      duration=2.0)
     assert abs(creep_rate(t, s) / converged_creep - 1.0) > 0.1
 
 
-def test_sliding_above_the_friction_angle_at_g_sin_minus_mu_cos(tmp_path):
+def test_sliding_above_the_friction_angle_at_g_sin_minus_mu_cos():
     """tan θ > μ (isotropic): a = g (sin θ − μ cos θ); the regularisation lowers friction by
     v/sqrt(v² + v_ε²) ≥ 1 − 2e-5 past 0.15 m/s (the fit window); 0.5 % covers the normal-force
     transient and the fit, as for RK4 (test_screw_sdf_scenes.py), at a 10 ms step."""
     theta, mu = math.radians(15.0), 0.1
-    t, s = slope_run(tmp_path, theta=theta, mu=mu, ev_a=1.0, integrator="rosenbrock_w", dt=1e-2, duration=0.8)
+    t, s = slope_run(theta=theta, mu=mu, ev_a=1.0, integrator="rosenbrock_w", dt=1e-2, duration=0.8)
     w = t >= 0.3
     a = 2 * np.polyfit(t[w], s[w], 2)[0]
     assert a == pytest.approx(G * (math.sin(theta) - mu * math.cos(theta)), rel=5e-3)

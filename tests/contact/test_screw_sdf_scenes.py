@@ -8,17 +8,19 @@ Robots are eels-1.0 with 2 modules, no head, joints held straight by screw_drive
 from __future__ import annotations
 
 import math
-import textwrap
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from snakesim.components.contact import steady_axial_speed
 from snakesim.components.multibody.linearization import LinkWrenchJacobian
-from snakesim.framework import Component, Input, Output, Params
+from snakesim.framework import Builder, Component, Input, Output, Params
 from snakesim.framework.linearization import Elementwise
-from snakesim.framework.registry import build_registry
-from snakesim.framework.session import load_session
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "validation"))
+from screw_scenes import downhill, on_slope, plane, screw_scene  # noqa: E402
 
 G = 9.81
 
@@ -81,59 +83,38 @@ class WrenchSum(Component[WrenchSumParams]):
         np.add(u.a, u.b, out=y.y)
 
 
-@pytest.fixture(scope="module")
-def registry():
-    reg = build_registry(load_entry_points=False)
-    reg.add_component(Rail)
-    reg.add_component(WrenchSum)
-    return reg
+NL = 9    # eels-1.0, 2 modules, no head: tail + 2 x (knuckle, module, 2 screw links)
 
 
-ROBOT = 'design: eels-1.0, modules: 2, head: false'
+def scene(*, terrain, base, omega=0.0, lead=0.35, material=None, duration=1.0, rail=False, v_eps=1e-3,
+          integrator="rk4", dt=0.001):
+    """The screw pair (screw_scenes.py) on ``terrain``, its base placed by ``base`` (multibody params); with
+    ``rail`` the contact's wrenches are summed with a rail's on their way to the robot."""
+    b = Builder(dt=dt, duration=duration, integrator=integrator)
+    robot, contact = screw_scene(b, terrain=terrain, robot={"robot": {"lead_angle": lead}, **base}, omega=omega,
+                                 contact={"v_eps": v_eps, "material": {} if material is None else material})
+    if rail:
+        rail_, total = b.add(Rail("rail", nl=NL), WrenchSum("sum", nl=NL))
+        b.connect(robot.out.link_poses, rail_.inp.poses)
+        b.connect(robot.out.link_velocities, rail_.inp.vels)
+        b.connect(contact.out.wrenches, total.inp.a)
+        b.connect(rail_.out.wrenches, total.inp.b)
+        b.connect(total.out.y, robot.inp.wrenches)
+    else:
+        b.connect(contact.out.wrenches, robot.inp.wrenches)
+    b.record(robot.out.com, robot.out.joint_v, robot.out.link_poses, contact.out.normal_force,
+             contact.out.screw_normal_force)
+    sim = b.build()
+    assert sim.plan.components["robot"].robot.nl == NL
+    return sim, sim.run()
 
 
-def scene(tmp_path, registry, *, terrain, base, omega=0.0, lead=0.35, material="{}", duration=1.0, rail=False,
-          v_eps=1e-3, integrator="rk4", dt=0.001):
-    nl = 9    # eels-1.0, 2 modules, no head: tail + 2 x (knuckle, module, 2 screw links)
-    rail_part = f"""
-      rail: {{type: test_rail, params: {{nl: {nl}}}}}
-      sum: {{type: test_wrench_sum, params: {{nl: {nl}}}}}""" if rail else ""
-    wiring = """
-      - robot.link_poses -> rail.poses
-      - robot.link_velocities -> rail.vels
-      - contact.wrenches -> sum.a
-      - rail.wrenches -> sum.b
-      - sum.y -> robot.wrenches""" if rail else """
-      - contact.wrenches -> robot.wrenches"""
-    text = f"""
-    sim: {{duration: {duration}, dt: {dt}, integrator: {integrator}}}
-    components:
-      terrain: {{type: terrain, params: {{spec: {terrain}}}}}
-      robot: {{type: multibody, params: {{{ROBOT}, robot: {{lead_angle: {lead}}}, {base}}}}}
-      drive: {{type: screw_drive, params: {{omega: {omega}}}}}
-      contact: {{type: screw_sdf_contact, params: {{v_eps: {v_eps}, material: {material}}}}}{rail_part}
-    connections:
-      - terrain.terrain -> contact.terrain
-      - robot.link_poses -> contact.link_poses
-      - robot.link_velocities -> contact.link_velocities
-      - robot.joint_v -> contact.joint_v, drive.joint_v
-      - robot.joint_q -> drive.joint_q
-      - drive.tau -> robot.tau{wiring}
-    record: [robot.com, robot.joint_v, robot.link_poses, contact.normal_force, contact.screw_normal_force]
-    """
-    path = tmp_path / "scene.yaml"
-    path.write_text(textwrap.dedent(text).lstrip("\n"))
-    session = load_session(path, registry=registry)
-    assert session.plan.components["robot"].robot.nl == nl
-    return session, session.run()
-
-
-FLAT = "{kind: plane, materials: [{name: ice, k: 1.0e5, c: 1.0e3, mu: 0.1}]}"
+FLAT = plane(mu=0.1)
 
 
 @pytest.mark.parametrize("integrator, dt", [("rk4", 1e-3), ("rosenbrock_w", 5e-3)])
 @pytest.mark.parametrize("lead, k, omega", [(0.35, 4.0, 2.0), (0.6, 2.0, 3.0), (0.25, 8.0, -1.5)])
-def test_straight_robot_drives_at_the_steady_axial_speed(tmp_path, registry, lead, k, omega, integrator, dt):
+def test_straight_robot_drives_at_the_steady_axial_speed(lead, k, omega, integrator, dt):
     """u* = ωr(k−1) sinλ cosλ / (1 + (k−1)cos²λ) (steady_state.py) per screw, at its measured spin.
 
     The velocity servo leaves each module's screws a slightly different spin ω_s (its error
@@ -154,9 +135,9 @@ def test_straight_robot_drives_at_the_steady_axial_speed(tmp_path, registry, lea
     # start near the steady state (screws spinning, robot moving at the nominal u*): the slow
     # part of the transient is then a small correction
     u0 = steady_axial_speed(omega, 0.09, lead, k)
-    base = f"base_position: [0, 0, 0.0898], base_velocity: [{u0}, 0, 0, 0, 0, 0], v0: {{'screw_front_*': {omega}}}"
-    session, r = scene(tmp_path, registry, terrain=FLAT, base=base, omega=omega,
-                       lead=lead, material=f"{{ev_a: {k}}}", duration=1.2, rail=True, integrator=integrator, dt=dt)
+    base = {"base_position": [0, 0, 0.0898], "base_velocity": [u0, 0, 0, 0, 0, 0], "v0": {"screw_front_*": omega}}
+    session, r = scene(terrain=FLAT, base=base, omega=omega,
+                       lead=lead, material={"ev_a": k}, duration=1.2, rail=True, integrator=integrator, dt=dt)
     assert r.summary["completed"], r.summary
     t, com = r["t"], r["robot.com"]
     lay = session.plan.components["contact"].screws
@@ -176,32 +157,16 @@ def test_straight_robot_drives_at_the_steady_axial_speed(tmp_path, registry, lea
     assert r["contact.normal_force"][late, 0].mean() == pytest.approx(weight, rel=1e-3)
 
 
-def _slope(theta, mu=0.1):
-    return f"{{kind: plane, tilt: {theta}, materials: [{{name: ice, k: 1.0e5, c: 1.0e3, mu: {mu}}}]}}"
-
-
-def _on_slope(theta, r=0.0898):
-    """Base pose lying along the fall line (+x rises), axis tilted up by θ, screws touching."""
-    n = np.array([-math.sin(theta), 0.0, math.cos(theta)])
-    pos = r * n
-    quat = [0.0, math.sin(-theta / 2), 0.0, math.cos(-theta / 2)]   # R_y(−θ): x̂ -> (cosθ, 0, sinθ)
-    return f"base_position: [{pos[0]}, {pos[1]}, {pos[2]}], base_quaternion: {quat}"
-
-
-def _downhill(com, theta):
-    return -(com[:, 0] * math.cos(theta) + com[:, 2] * math.sin(theta))
-
-
-def test_robot_below_the_friction_angle_creeps_at_the_regularisation_speed(tmp_path, registry):
+def test_robot_below_the_friction_angle_creeps_at_the_regularisation_speed():
     """tanθ < μ: isotropic friction holds the robot but for the regularised creep (kernels.py):
     μF_n‖s‖ = W sinθ with ‖s‖ = v/sqrt(v² + v_ε²) gives v_c = v_ε ρ/sqrt(1 − ρ²), ρ = tanθ/μ.
     Drift over Δt is bounded by v_c Δt (+10 % for the settling transient and discretisation),
     and, the model being what we derived, is not much less either (> 0.8 v_c Δt)."""
     theta, mu, v_eps = math.radians(4.0), 0.1, 1e-3
-    _, r = scene(tmp_path, registry, terrain=_slope(theta, mu), base=_on_slope(theta), material="{ev_a: 1.0}",
+    _, r = scene(terrain=plane(mu, tilt=theta), base=on_slope(theta), material={"ev_a": 1.0},
                  duration=1.5, v_eps=v_eps)
     assert r.summary["completed"], r.summary
-    t, s = r["t"], _downhill(r["robot.com"], theta)
+    t, s = r["t"], downhill(r["robot.com"], theta)
     rho = math.tan(theta) / mu
     v_c = v_eps * rho / math.sqrt(1 - rho * rho)
     i0, i1 = np.searchsorted(t, 0.5), len(t) - 1
@@ -211,15 +176,15 @@ def test_robot_below_the_friction_angle_creeps_at_the_regularisation_speed(tmp_p
     assert drift >= 0.8 * v_c * dt, (drift, v_c * dt)
 
 
-def test_robot_above_the_friction_angle_slides_at_g_sin_minus_mu_cos(tmp_path, registry):
+def test_robot_above_the_friction_angle_slides_at_g_sin_minus_mu_cos():
     """tanθ > μ: a = g(sinθ − μ cosθ). Regularisation lowers friction by ‖s‖ = v/sqrt(v² + v_ε²),
     1 − ½(v_ε/v)² ≥ 1 − 2e-5 once v > 0.15 m/s (the fit window); 0.5 % covers the normal-force
     transient and the fit."""
     theta, mu = math.radians(15.0), 0.1
-    _, r = scene(tmp_path, registry, terrain=_slope(theta, mu), base=_on_slope(theta), material="{ev_a: 1.0}",
+    _, r = scene(terrain=plane(mu, tilt=theta), base=on_slope(theta), material={"ev_a": 1.0},
                  duration=0.8)
     assert r.summary["completed"], r.summary
-    t, s = r["t"], _downhill(r["robot.com"], theta)
+    t, s = r["t"], downhill(r["robot.com"], theta)
     w = t >= 0.3
     a = 2 * np.polyfit(t[w], s[w], 2)[0]
     expected = G * (math.sin(theta) - mu * math.cos(theta))

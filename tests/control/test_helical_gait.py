@@ -9,21 +9,11 @@ import math
 import numpy as np
 import pytest
 
-from snakesim.components.control.helical_gait import HelicalGait, helix_amplitude, ring_centre
+from snakesim.components.control.helical_gait import helix_amplitude, ring_centre
 from snakesim.components.multibody.robot_model import RobotModel
 from snakesim.framework.session import load_session
 
-
-@pytest.fixture(scope="module")
-def mini():
-    return RobotModel.load(design="mini-eels-1.0", modules=10)
-
-
-def gait(robot, **params):
-    c = HelicalGait.__new__(HelicalGait)
-    c.name, c.robot, c.p = "gait", robot, HelicalGait.Params(**params)
-    c.setup()
-    return c
+from helical_parts import make_gait
 
 
 class Y:
@@ -39,7 +29,7 @@ def evaluate(c, t):
 
 def test_rolling_helix_joint_angles_and_rates(mini):
     A, phi, f = 0.8, 0.3, 0.5
-    c = gait(mini, amplitude=A, phase_step=phi, frequency=f, direction=-1, t_start=1.0)
+    c = make_gait(mini, amplitude=A, phase_step=phi, frequency=f, direction=-1, t_start=1.0)
     names = list(mini.joints)
     pitch = [names.index(f"bend_0{i}") for i in (0, 2, 4, 6, 8)]
     yaw = [names.index(f"bend_0{i}") for i in (1, 3, 5, 7, 9)]
@@ -65,7 +55,7 @@ def test_helix_amplitude_matches_the_chain_ring(mini):
         assert phi == 0.0
         centre, radius = ring_centre(mini, A)
         assert radius == pytest.approx(R, rel=1e-9)
-    c = gait(mini, helix={"radius": 0.2, "pitch": 0.1})
+    c = make_gait(mini, helix={"radius": 0.2, "pitch": 0.1})
     cc = 0.1 / (2 * math.pi)
     kappa, tau = 0.2 / (0.04 + cc * cc), cc / (0.04 + cc * cc)
     assert c.spacing == pytest.approx(0.09)
@@ -92,13 +82,13 @@ def test_pipe_climb_scene_places_the_ring_on_the_pipe_axis(mini):
 ])
 def test_parameters_are_checked(mini, params, message):
     with pytest.raises(ValueError, match=message):
-        gait(mini, **params)
+        make_gait(mini, **params)
 
 
 def test_joints_that_are_not_pitch_or_yaw_are_refused():
     eels = RobotModel.load(design="eels-1.0", modules=2)
     with pytest.raises(ValueError, match="neither pitch"):
-        gait(eels, amplitude=0.3, joints="*")
+        make_gait(eels, amplitude=0.3, joints="*")
 
 
 def test_mini_eels_holds_in_the_pipe_against_gravity():

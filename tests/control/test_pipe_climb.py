@@ -14,9 +14,9 @@ import types
 import numpy as np
 import pytest
 
-from snakesim.components.control.helical_gait import HelicalGait
-from snakesim.components.multibody.robot_model import RobotModel
 from snakesim.framework.session import load_session
+
+from helical_parts import make_gait
 
 R_S, F = 0.028, 0.5                  # m, module shell radius; Hz, the scene's rolling frequency
 NO_SLIP = 2 * math.pi * R_S          # m per cycle
@@ -69,18 +69,6 @@ def test_rosenbrock_w_at_2_ms_climbs_as_rk4_at_half_a_millisecond():
     assert w == pytest.approx(k, rel=0.1)
 
 
-@pytest.fixture(scope="module")
-def mini():
-    return RobotModel.load(design="mini-eels-1.0", modules=10)
-
-
-def _gait(robot, **params):
-    c = HelicalGait.__new__(HelicalGait)
-    c.name, c.robot, c.p = "gait", robot, HelicalGait.Params(**params)
-    c.setup()
-    return c
-
-
 def _inputs(robot, rotations, **commands):
     nan = np.full(1, np.nan)
     u = types.SimpleNamespace(link_rotations=rotations, amplitude=nan,
@@ -103,7 +91,7 @@ def test_world_reference_bends_about_up_and_leads_towards_the_phase_never_back(m
     reference phase's lead on ψ clipped to [0, lead] in the rolling direction: 0 when the body is ahead (it holds,
     it never rolls back), `lead` when it is far behind."""
     A, lead, f = 0.75, 0.3, 0.5
-    g = _gait(mini, amplitude=A, frequency=f, reference="world", lead=lead, t_start=1.0)
+    g = make_gait(mini, amplitude=A, frequency=f, reference="world", lead=lead, t_start=1.0)
     names = list(mini.joints)
     pitch = [names.index(f"bend_0{i}") for i in (0, 2, 4, 6, 8)]
     yaw = [names.index(f"bend_0{i}") for i in (1, 3, 5, 7, 9)]

@@ -48,6 +48,13 @@ def pendulum(tmp_path, stops, duration=2.0, omega0=0.0, name="scene.yaml") -> Pa
     return path
 
 
+def scene_file(tmp_path, name: str, text: str) -> Path:
+    """A scene for the command line: the text, dedented, in tmp_path/name."""
+    path = tmp_path / name
+    path.write_text(textwrap.dedent(text))
+    return path
+
+
 def summary(out: Path) -> dict:
     return json.loads((out / "summary.json").read_text())
 
@@ -174,14 +181,13 @@ def _with_test_components(monkeypatch):
 
 def test_a_components_success_stop_exits_0(tmp_path, monkeypatch):
     _with_test_components(monkeypatch)
-    scene = tmp_path / "goal.yaml"
-    scene.write_text(textwrap.dedent("""
+    scene = scene_file(tmp_path, "goal.yaml", """
         sim: {duration: 1.0, dt: 0.01}
         components:
           pend: {type: pendulum}
           goal: {type: test_goal, params: {at: 0.1}}
         connections: [pend.theta -> goal.u]
-    """))
+    """)
     out = tmp_path / "o"
     r = invoke("run", scene, "--quiet", "--out", out)
     assert r.exit_code == 0, r.output
@@ -193,22 +199,20 @@ def test_a_components_success_stop_exits_0(tmp_path, monkeypatch):
 
 def _numerical(tmp_path, monkeypatch):
     _with_test_components(monkeypatch)
-    scene = tmp_path / "raises.yaml"
-    scene.write_text(textwrap.dedent("""
+    scene = scene_file(tmp_path, "raises.yaml", """
         sim: {duration: 1.0, dt: 0.01}
         components:
           pend: {type: pendulum}
           bad: {type: test_raises_linalg}
         connections: [pend.theta -> bad.u]
         record: [bad.y]
-    """))
+    """)
     return [scene]
 
 
 def _mobility(tmp_path, monkeypatch):
     # a robot lying along x in zero gravity: its axis is 90° from the vertical, past the 60° limit at once
-    scene = tmp_path / "tilted.yaml"
-    scene.write_text(textwrap.dedent("""
+    scene = scene_file(tmp_path, "tilted.yaml", """
         sim: {duration: 0.1, dt: 0.001, integrator: rk4}
         components:
           robot: {type: multibody, params: {design: eels-1.0, modules: 1, gravity: [0.0, 0.0, 0.0]}}
@@ -217,7 +221,7 @@ def _mobility(tmp_path, monkeypatch):
           - robot.link_rotations -> monitor.link_rotations
           - robot.link_poses -> monitor.link_poses
           - robot.link_velocities -> monitor.link_velocities
-    """))
+    """)
     return [scene]
 
 

@@ -12,8 +12,10 @@ import dataclasses
 import numpy as np
 import pytest
 
-from snakesim.framework import Component, Output, Params
+from framework_components import Oscillator, Rotor
+from snakesim.framework import Builder, Component, Output, Params
 from snakesim.framework.state_edit import StateEdit
+from state_probe import StateProbe
 
 
 class CountParams(Params):
@@ -69,32 +71,6 @@ class Requester(Component[RequesterParams]):
             run.request(edit)
 
 
-@dataclasses.dataclass
-class ProbeRun:
-    plan: object = None
-    seen: list = dataclasses.field(default_factory=list)    # (t, X copy, XD copy) at each output pass
-
-
-class Probe(Component[Params]):
-    """A sink whose output() snapshots the plan's whole state (the test hands it the plan)."""
-
-    type_name = "test_state_probe"
-    is_sink = True
-    t_seen = Output(unit="s", feedthrough=())
-
-    def make_cache(self, x, u, y):
-        return ProbeRun()
-
-    def output(self, t, x, u, y):
-        run = u.cache
-        if run.plan is not None:
-            run.seen.append((t, run.plan.X.copy(), run.plan.XD.copy()))
-        y.t_seen[...] = t
-
-    def update(self, t, xd, u):
-        pass
-
-
 class Gone(Component[Params]):
     """edit_state is never overridden: no hook list."""
 
@@ -102,34 +78,21 @@ class Gone(Component[Params]):
     y = Output(unit="1", feedthrough=())
 
 
-@pytest.fixture(scope="module")
-def reg(registry):
-    for c in (Counter, Requester, Probe, Gone):
-        if c.type_name not in registry.components:
-            registry.add_component(c)
-    return registry
-
-
-SCENE = """\
-sim: {duration: 0.2, dt: 0.01, integrator: %(integrator)s, record_rate: 100}
-components:
-  osc: {type: test_oscillator, params: {omega: 3.0}}
-  rot: {type: test_rotor, params: {rate: 2.0, angle0: 0.3}}
-  count: {type: test_counter, rate: 50}
-  req: {type: test_requester}
-  probe: {type: test_state_probe, rate: 100}
-record: [osc.x, rot.angle, count.n]
-"""
-
-
-def _session(scene, integrator="rk4"):
-    s = scene(SCENE % {"integrator": integrator})
+def _session(integrator="rk4"):
+    """An oscillator, a rotor on its manifold, a discrete counter, a requester and the probe (handed the plan)."""
+    b = Builder(dt=0.01, duration=0.2, integrator=integrator, record_rate=100)
+    # the rotor's params as a dict: rate= given to a component is its sample rate
+    osc, rot, count = b.add(Oscillator("osc", omega=3.0), Rotor("rot", {"rate": 2.0, "angle0": 0.3}),
+                              Counter("count", rate=50))
+    b.add(Requester("req"), StateProbe("probe", rate=100))
+    b.record(osc.out.x, rot.out.angle, count.out.n)
+    s = b.build()
     s.plan.caches["probe"].plan = s.plan
     return s
 
 
-def test_reset_returns_every_state_to_its_initial_value_exactly_and_time_goes_on(reg, scene):
-    s = _session(scene)
+def test_reset_returns_every_state_to_its_initial_value_exactly_and_time_goes_on():
+    s = _session()
     req = s.plan.caches["req"]
     req.at, req.request = [0.1], lambda e: e.reset()
     X0, XD0 = s.plan.X.copy(), s.plan.XD.copy()
@@ -156,10 +119,10 @@ def test_reset_returns_every_state_to_its_initial_value_exactly_and_time_goes_on
     assert r.summary["t_end_s"] == pytest.approx(0.2)
 
 
-def test_adaptive_integrator_restarts_with_no_step_size_memory(reg, scene):
+def test_adaptive_integrator_restarts_with_no_step_size_memory():
     """dopri5 at a tolerance that needs sub-steps: its first base step from t0 starts at h = dt and is
     rejected until h fits; after a reset it must do exactly the same (the adapted h is forgotten)."""
-    s = _session(scene, integrator="{name: dopri5, params: {rtol: 1.0e-12, atol: 1.0e-14}}")
+    s = _session(integrator={"name": "dopri5", "params": {"rtol": 1.0e-12, "atol": 1.0e-14}})
     req = s.plan.caches["req"]
     adapted = []
 
@@ -181,11 +144,11 @@ def test_adaptive_integrator_restarts_with_no_step_size_memory(reg, scene):
     assert r.summary["integrator"]["restarts"] == 1
 
 
-def test_write_sets_named_elements_and_everything_else_advances(reg, scene):
-    s = _session(scene)
+def test_write_sets_named_elements_and_everything_else_advances():
+    s = _session()
     req = s.plan.caches["req"]
     req.at, req.request = [0.1], lambda e: e.write("osc", [0, 1], [0.25, -0.5])
-    ref = _session(scene)                       # the same run without the edit
+    ref = _session()                       # the same run without the edit
     ref.plan.caches["req"].at = []
     s.run()
     ref.run()
@@ -200,8 +163,8 @@ def test_write_sets_named_elements_and_everything_else_advances(reg, scene):
     assert not np.array_equal(seen[0.15][0][osc], refs[0.15][0][osc])
 
 
-def test_write_discrete_and_reset_then_write_in_order(reg, scene):
-    s = _session(scene)
+def test_write_discrete_and_reset_then_write_in_order():
+    s = _session()
     req = s.plan.caches["req"]
 
     def both(e):
@@ -229,8 +192,8 @@ def test_write_discrete_and_reset_then_write_in_order(reg, scene):
     (lambda e: e.write("osc", [1, 1], [1.0, 2.0]), "an index is given twice"),
     (lambda e: e.write_discrete("osc", [0], [1.0]), "component 'osc' has no discrete state"),
 ])
-def test_invalid_requests_raise_and_never_reach_the_state(reg, scene, call, message):
-    s = _session(scene)
+def test_invalid_requests_raise_and_never_reach_the_state(call, message):
+    s = _session()
     e = StateEdit(s.plan, s.plan.X.copy(), s.plan.XD.copy())
     with pytest.raises(ValueError) as err:
         call(e)
@@ -238,20 +201,17 @@ def test_invalid_requests_raise_and_never_reach_the_state(reg, scene, call, mess
     assert not e.pending
 
 
-def test_no_hook_no_editor_and_no_summary_entry(reg, scene):
-    s = scene("""\
-    sim: {duration: 0.05, dt: 0.01}
-    components:
-      osc: {type: test_oscillator}
-      plain: {type: test_plain}
-    """)
+def test_no_hook_no_editor_and_no_summary_entry():
+    b = Builder(dt=0.01, duration=0.05)
+    b.add(Oscillator("osc"), Gone("plain"))
+    s = b.build()
     assert s.plan.edits == ()
     r = s.run()
     assert "state_edits" not in r.summary and "restarts" not in r.summary["integrator"]
 
 
-def test_a_requester_is_kept_and_called_once_per_base_step_not_at_the_last_tick(reg, scene):
-    s = _session(scene)
+def test_a_requester_is_kept_and_called_once_per_base_step_not_at_the_last_tick():
+    s = _session()
     assert "req" not in s.plan.pruned and len(s.plan.edits) == 1
     s.run()
     calls = s.plan.caches["req"].calls

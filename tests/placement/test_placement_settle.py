@@ -25,13 +25,18 @@ def settle(**params):
     return h
 
 
+def feed(h, o):
+    """A multibody's outputs o (link poses, velocities, joint angles) into the settle harness h."""
+    h.inputs.link_poses, h.inputs.link_velocities, h.inputs.joint_q = o["link_poses"], o["link_velocities"], o["joint_q"]
+
+
 def test_attraction_is_k_times_distance_along_minus_normal_and_drag_opposes_motion():
     # straight robot, screw envelopes (r = 0.07) at height z: every screw's nearest sample is z − 0.07 above
     # the ice; the pull on it is k (z − 0.07) straight down, nothing else (at rest: no drag)
     z, k = 0.12, 3000.0
     o = straight_poses(z)
     h = settle(k_attract=k)
-    h.inputs.link_poses, h.inputs.link_velocities, h.inputs.joint_q = o["link_poses"], o["link_velocities"], o["joint_q"]
+    feed(h, o)
     y = h.outputs()
     np.testing.assert_allclose(y["gap"], z - 0.07, atol=1e-12)
     W = y["wrenches"]
@@ -50,7 +55,7 @@ def test_attraction_is_k_times_distance_along_minus_normal_and_drag_opposes_moti
 def test_not_settled_by_time_limit_stops_the_run_with_the_reason():
     o = straight_poses(0.5)
     h = settle(time_limit=1.0)
-    h.inputs.link_poses, h.inputs.link_velocities, h.inputs.joint_q = o["link_poses"], o["link_velocities"], o["joint_q"]
+    feed(h, o)
     h.update(0.5)
     assert h.c._stop.reason is None
     h.update(1.0)
@@ -66,7 +71,7 @@ def test_latch_after_quiet_time_sets_gravity_setpoints_and_preload():
     # screws resting on the ice at rest: in contact and still -> latch after quiet_time
     o = straight_poses(0.0695)
     h = settle(quiet_time=0.01, preload=50.0)
-    h.inputs.link_poses, h.inputs.link_velocities, h.inputs.joint_q = o["link_poses"], o["link_velocities"], o["joint_q"]
+    feed(h, o)
     for i in range(12):
         h.update(i * 1e-3)
     y = h.outputs(0.012)
@@ -82,7 +87,7 @@ def test_latch_after_quiet_time_sets_gravity_setpoints_and_preload():
 def test_loading_phase_keeps_gravity_off_and_joints_free_then_latches_the_loaded_shape():
     o = straight_poses(0.0695)
     h = settle(quiet_time=0.01, load_time=0.005)
-    h.inputs.link_poses, h.inputs.link_velocities, h.inputs.joint_q = o["link_poses"], o["link_velocities"], o["joint_q"]
+    feed(h, o)
     for i in range(12):
         h.update(i * 1e-3)
     q = o["joint_q"] + 0.01                                    # the shape moves while loading

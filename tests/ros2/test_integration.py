@@ -1,14 +1,11 @@
 """`snakesim run --ros2` seen from a separate process that knows only cyclonedds and the standard types."""
 
 import json
-import os
-import subprocess
-import sys
-from pathlib import Path
 
 import pytest
 
-HERE = Path(__file__).parent
+from ros2_peer import run_beside
+
 RATE = 50.0           # Hz, /joint_states and /clock as set on the command line
 DURATION = 1.0        # s simulated
 
@@ -17,24 +14,10 @@ def test_joint_states_at_the_set_rate_and_clock_advancing(dds_domain):
     from snakesim.components.multibody.robot_model import RobotModel
 
     domain = dds_domain()
-    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
-    env.pop("CYCLONEDDS_URI", None)
-    sub = subprocess.Popen([sys.executable, str(HERE / "subscriber.py"), str(domain), "40"],
-                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
-    try:
-        assert json.loads(sub.stdout.readline()) == {"ready": True}, sub.stderr.read()
-        exe = Path(sys.executable).with_name("snakesim")
-        run = subprocess.run([str(exe), "run", "robot-zero-g", "--set", "robot.modules=3", "--duration", str(DURATION),
-                              "--ros2-domain", str(domain), "--ros2-rate", f"joint_states={RATE:g}",
-                              "--ros2-rate", f"clock={RATE:g}", "--quiet"],
-                             capture_output=True, text=True, timeout=60, env=env)
-        assert run.returncode == 0, run.stderr
-        out, err = sub.communicate(timeout=30)
-    finally:
-        if sub.poll() is None:
-            sub.kill()
-            sub.wait()
-    got = json.loads(out.strip().splitlines()[-1])
+    got, _ = run_beside(("subscriber.py", domain, 40),
+                        ["robot-zero-g", "--set", "robot.modules=3", "--duration", DURATION, "--ros2-domain", domain,
+                         "--ros2-rate", f"joint_states={RATE:g}", "--ros2-rate", f"clock={RATE:g}", "--quiet"],
+                        timeout=60, peer_timeout=30)
     robot = RobotModel.load(design="eels-1.0", modules=3)
     assert got["names"] == list(robot.joints) and len(got["position_sample"]) == robot.nj
     stamps = got["joint_states"]
@@ -83,23 +66,9 @@ def test_commands_move_joints_toggle_gravity_and_malformed_are_rejected(dds_doma
     scene = tmp_path / "falling.yaml"
     duration = 4.0
     scene.write_text(FALLING % {"duration": duration})
-    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
-    env.pop("CYCLONEDDS_URI", None)
-    cmd = subprocess.Popen([sys.executable, str(HERE / "commander.py"), str(domain), JOINT, "40"],
-                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
-    try:
-        assert json.loads(cmd.stdout.readline()) == {"ready": True}, cmd.stderr.read()
-        exe = Path(sys.executable).with_name("snakesim")
-        run = subprocess.run([str(exe), "run", str(scene), "--realtime", "--ros2-domain", str(domain),
-                              "--ros2-commands", "--ros2-rate", "tf=100", "--quiet", "--out", str(tmp_path / "out")],
-                             capture_output=True, text=True, timeout=90, env=env)
-        assert run.returncode == 0, run.stderr
-        out, err = cmd.communicate(timeout=30)
-    finally:
-        if cmd.poll() is None:
-            cmd.kill()
-            cmd.wait()
-    got = json.loads(out.strip().splitlines()[-1])
+    got, run = run_beside(("commander.py", domain, JOINT, 40),
+                          [scene, "--realtime", "--ros2-domain", domain, "--ros2-commands", "--ros2-rate", "tf=100",
+                           "--quiet", "--out", tmp_path / "out"], timeout=90, peer_timeout=30)
     assert got["matched"], "the commander's writers never matched the run's readers"
     # set-points: the joint moved to the commanded angle
     assert got["moved_at"] is not None, f"{JOINT} never reached the set-point: {got['joint'][-3:]}"

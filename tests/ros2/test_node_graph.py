@@ -2,36 +2,16 @@
 does, seen by a separate process (graph_listener.py) that reads it with Humble's rmw_dds_common definition and
 matches the gids against DDS's own discovery of the writers."""
 
-import json
-import os
-import subprocess
-import sys
-from pathlib import Path
-
 import pytest
 
-HERE = Path(__file__).parent
+from ros2_peer import run_beside
 
 
 def test_ros2_node_list_would_show_snakesim_with_its_topics(dds_domain):
     domain = dds_domain()
-    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
-    env.pop("CYCLONEDDS_URI", None)
-    listener = subprocess.Popen([sys.executable, str(HERE / "graph_listener.py"), str(domain), "30"],
-                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
-    try:
-        assert json.loads(listener.stdout.readline()) == {"ready": True}, listener.stderr.read()
-        exe = Path(sys.executable).with_name("snakesim")
-        run = subprocess.run([str(exe), "run", "robot-zero-g", "--set", "robot.modules=2", "--duration", "2.0",
-                              "--realtime", "--ros2-domain", str(domain), "--quiet"],
-                             capture_output=True, text=True, timeout=90, env=env)
-        assert run.returncode == 0, run.stderr[-3000:]
-        out, err = listener.communicate(timeout=40)
-    finally:
-        if listener.poll() is None:
-            listener.kill()
-            listener.wait()
-    got = json.loads(out.strip().splitlines()[-1])
+    got, _ = run_beside(("graph_listener.py", domain, 30),
+                        ["robot-zero-g", "--set", "robot.modules=2", "--duration", "2.0", "--realtime",
+                         "--ros2-domain", domain, "--quiet"], timeout=90, peer_timeout=40)
     nodes = {n["name"]: n for n in got["nodes"]}
     assert {"snakesim", "snakesim_sim_control"} <= set(nodes), sorted(nodes)
     node = nodes["snakesim"]

@@ -2,14 +2,13 @@
 stereo pair's Image, depth and CameraInfo on their topics, stamped at the sensors' rates, decoded with
 rosbags' standard definitions; the bytes the bridge writes decode to what the sensor measured."""
 
-import json
 import math
-import os
-import subprocess
 import sys
 from pathlib import Path
 
 import numpy as np
+
+from ros2_peer import run_beside
 
 HERE = Path(__file__).parent
 LIDAR_RATE, CAMERA_RATE, DURATION = 10.0, 5.0, 0.6
@@ -35,22 +34,8 @@ def test_point_clouds_images_and_camera_info_reach_a_separate_process(dds_domain
     domain = dds_domain()
     scene = tmp_path / "sensors.yaml"
     scene.write_text(SCENE % {"duration": DURATION, "lidar": LIDAR_RATE, "camera": CAMERA_RATE})
-    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
-    env.pop("CYCLONEDDS_URI", None)
-    sub = subprocess.Popen([sys.executable, str(HERE / "sensor_subscriber.py"), str(domain), "60", "/lidar",
-                            "/stereo/left"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
-    try:
-        assert json.loads(sub.stdout.readline()) == {"ready": True}, sub.stderr.read()
-        exe = Path(sys.executable).with_name("snakesim")
-        run = subprocess.run([str(exe), "run", str(scene), "--ros2-domain", str(domain), "--quiet"],
-                             capture_output=True, text=True, timeout=120, env=env)
-        assert run.returncode == 0, run.stderr
-        out, err = sub.communicate(timeout=60)
-    finally:
-        if sub.poll() is None:
-            sub.kill()
-            sub.wait()
-    got = json.loads(out.strip().splitlines()[-1])
+    got, _ = run_beside(("sensor_subscriber.py", domain, 60, "/lidar", "/stereo/left"),
+                        [scene, "--ros2-domain", domain, "--quiet"], timeout=120, peer_timeout=60)
     # every sample of the run, at the sensors' own sample times (t = 0, 1/rate, ...; the last tick runs no update)
     expected = {"points": LIDAR_RATE, "image": CAMERA_RATE, "depth": CAMERA_RATE, "info": CAMERA_RATE}
     for key, rate in expected.items():

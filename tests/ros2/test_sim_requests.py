@@ -8,22 +8,16 @@ itself: after a reset it equals X0 and XD0 bit for bit; after a placement the ba
 
 from __future__ import annotations
 
-import dataclasses
 import json
 import logging
 import math
-import os
-import subprocess
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-from snakesim.framework import Component, Output, Params
+from ros2_peer import peer_result, start_peer
 from snakesim.framework.assembly import ComponentSpec, resolve
-
-HERE = Path(__file__).parent
+from state_probe import StateProbe
 
 SCENE = """\
 description: a 2-module robot falling, a bend joint driven from 0.3 rad to 0 by a discrete PID
@@ -39,31 +33,6 @@ connections:
   - pid.tau -> robot.tau
 record: [robot.link_poses, robot.joint_q]
 """
-
-
-@dataclasses.dataclass
-class ProbeRun:
-    plan: object = None
-    seen: list = dataclasses.field(default_factory=list)
-
-
-class StateProbe(Component[Params]):
-    """Snapshots the plan's X and XD at every output pass (the test hands it the plan)."""
-
-    type_name = "test_ros2_state_probe"
-    is_sink = True
-    t_seen = Output(unit="s", feedthrough=())
-
-    def make_cache(self, x, u, y):
-        return ProbeRun()
-
-    def output(self, t, x, u, y):
-        run = u.cache
-        if run.plan is not None:
-            run.seen.append((t, run.plan.X.copy(), run.plan.XD.copy()))
-
-    def update(self, t, xd, u):
-        pass
 
 
 @pytest.fixture(scope="module")
@@ -85,30 +54,18 @@ def _session(tmp_path, registry, domain, duration=1.0, sim_control=None):
     attach_ros2(resolved, registry, params={"domain_id": domain})
     if sim_control:
         attach_sim_control(resolved, sim_control)
-    resolved.components["probe"] = ComponentSpec(type="test_ros2_state_probe", rate=1000.0)
+    resolved.components["probe"] = ComponentSpec(type="test_state_probe", rate=1000.0)
     s = Session(resolved, registry)
     s.plan.caches["probe"].plan = s.plan
     return s
 
 
 def _client(domain, script, seconds=30):
-    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
-    env.pop("CYCLONEDDS_URI", None)
-    proc = subprocess.Popen([sys.executable, str(HERE / "sim_client.py"), str(domain), str(seconds), json.dumps(script)],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
-    line = proc.stdout.readline()
-    assert line and json.loads(line) == {"ready": True}, proc.stderr.read()
-    return proc
+    return start_peer("sim_client.py", domain, seconds, json.dumps(script))
 
 
 def _result(proc):
-    try:
-        out, err = proc.communicate(timeout=30)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-    assert proc.returncode == 0, err[-3000:]
-    return json.loads(out.strip().splitlines()[-1])
+    return peer_result(proc, timeout=30, check=True)
 
 
 def _robot_x(s):

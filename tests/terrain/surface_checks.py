@@ -24,3 +24,14 @@ def onto_surface(terrain, p, iters=6):
         q = terrain.query(p)
         p = p - q.distance[:, None] * q.normal
     return p
+
+
+def assert_distance_lower_bound_holds(terrain, c, r, rng, samples):
+    """distance_lower_bound(c, r) is at most the distance of every one of ``samples`` points drawn uniformly in
+    each ball (centre c, radius r)."""
+    bound = terrain.distance_lower_bound(c, r)
+    dirs = rng.standard_normal((samples, 3))
+    dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
+    for ci, ri, b in zip(c, r, bound):
+        pts = ci + ri * dirs * rng.uniform(0, 1, (samples, 1)) ** (1 / 3)
+        assert b <= terrain.distance(pts).min() + 1e-12

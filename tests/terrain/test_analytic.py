@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from surface_checks import fd_gradient, onto_surface
+from surface_checks import assert_distance_lower_bound_holds, fd_gradient, onto_surface
 
 from snakesim.components.terrain import build_terrain, load_terrain
 
@@ -164,9 +164,4 @@ def test_distance_lower_bound_is_conservative(name):
     t = load_terrain(name)
     c = rng.uniform(-0.3, 0.3, (30, 3))
     r = rng.uniform(0.01, 0.1, 30)
-    bound = t.distance_lower_bound(c, r)
-    dirs = rng.standard_normal((200, 3))
-    dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
-    for ci, ri, b in zip(c, r, bound):
-        pts = ci + ri * dirs * rng.uniform(0, 1, (200, 1)) ** (1 / 3)
-        assert b <= t.distance(pts).min() + 1e-12
+    assert_distance_lower_bound_holds(t, c, r, rng, samples=200)

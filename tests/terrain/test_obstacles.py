@@ -4,7 +4,7 @@ the seeded random course, schema errors, the shipped course."""
 
 import numpy as np
 import pytest
-from surface_checks import fd_gradient
+from surface_checks import assert_distance_lower_bound_holds, fd_gradient
 
 from snakesim.components.terrain import Block, ObstacleField, Rock, build_terrain, load_terrain, scatter_obstacles
 from snakesim.components.terrain.base import unit
@@ -176,12 +176,7 @@ def test_distance_lower_bound_is_conservative():
     t = _course()
     c = np.column_stack([rng.uniform(0.5, 3.5, 40), rng.uniform(-1, 1, 40), rng.uniform(-0.1, 0.5, 40)])
     r = rng.uniform(0.02, 0.2, 40)
-    bound = t.distance_lower_bound(c, r)
-    dirs = rng.standard_normal((300, 3))
-    dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
-    for ci, ri, b in zip(c, r, bound):
-        pts = ci + ri * dirs * rng.uniform(0, 1, (300, 1)) ** (1 / 3)
-        assert b <= t.distance(pts).min() + 1e-12
+    assert_distance_lower_bound_holds(t, c, r, rng, samples=300)
 
 
 # -- the numba kernel against the NumPy implementation it replaced ------------------------------
