@@ -45,6 +45,8 @@ import numpy as np  # noqa: E402
 import pinocchio as pin  # noqa: E402
 
 from snakesim.components.contact.plane_kernels import plane_extremal_step, plane_step  # noqa: E402
+from snakesim.components.contact.contact_law import ContactLaw  # noqa: E402
+from snakesim.components.contact.kernels import MODES  # noqa: E402
 from snakesim.components.contact.screw_contact_kernels import SdfPorts, SdfWork, Surface  # noqa: E402
 from snakesim.components.control.pid_kernel import PidRun, pid_step  # noqa: E402
 from snakesim.components.kernel_args import bind  # noqa: E402
@@ -113,15 +115,19 @@ class HandLoop:
                        seen_vels=z((nl, 6)), seen_joint_v=z(nj), ring_row=z(n, dtype=np.int64), ring_dir=z((n, 3)),
                        ext_points=z((c.n_rings, 3)), ext_row=z(c.n_rings, dtype=np.int64), ext_distance=z(c.n_rings),
                        ext_normal=z((c.n_rings, 3)), ext_material=z(c.n_rings, dtype=np.int64))
+        law_rows = dict(mu_scale=np.ones(ns), ev_scale=np.ones(ns), sinkage=z(ns), slip_power=z(ns),
+                        slip_speed=z(ns), row_fn=z(ns), bad_row=np.full(1, -1, dtype=np.int64))
+        contact_law = ContactLaw(v_eps=float(c.p.v_eps), mode=MODES[c.p.regularisation], ev_floor=float(c.p.ev_floor),
+                                 row_of_owner=np.arange(ns, dtype=np.int64), **law_rows)
         contact_ports = SdfPorts(poses=poses, vels=vels, joint_v=jv, wrenches=W, screw_fn=z(ns), normal_force=z(1),
-                                 contacts=z(1))
+                                 contacts=z(1), law=contact_law)
         surface = Surface(origin=np.array(terrain.origin, dtype=float), n=np.array(terrain.n, dtype=float),
-                          region_material=int(terrain.region_material[0]), mats=c._material_table(terrain))
+                          region_material=int(terrain.region_material[0]), mats=c.material_table(terrain))
         state = bind(state_step, mb._tree, kin, ports)
         force = bind(force_step, mb._tree, kin, ports)
         law = bind(pid_step, pid._gains, PidRun(setpoint=setpoint, rate_ref=zero_nj, tau_ff=zero_nj, q=jq, v=jv,
                                                 x=xp, tau=tau, err=err, dint=dint, zrate=zrate))
-        contact = bind(plane_extremal_step if c.exact else plane_step, c._samples, work, contact_ports, surface)
+        contact = bind(plane_extremal_step if c.exact else plane_step, c.table, work, contact_ports, surface)
         times, table = sc._t, sc._table
         tail_i, tail_axis = self.tail._i, self.tail._axis
         dt = self.dt

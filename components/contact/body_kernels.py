@@ -4,11 +4,11 @@ kinematics, forces reduced to link wrenches. All write into preallocated arrays.
 Frames as in screw_contact_kernels.py: link_poses rows [x, y, z, qx, qy, qz, qw] (world),
 link_velocities rows [v of the link origin, ω] (world axes); sample tables in the link
 frame. The sample placement (sample_points), the plane query and broad phase (plane_query,
-plane_active) and the one contact law (kernels_numba.point_contact_force) are the screw
+plane_broad_phase) and the one contact law (kernels_numba.point_contact_force) are the screw
 back end's, imported; only the force loop is body-specific.
 
 Material table ``mats`` (nm, 5): columns k, c, μ, ev_a, ev_b (materials.py); bodies read
-k, c and μ (ev_a, ev_b describe screw threads). Per piece: ``mu_scale`` (μ_across / μ of
+k, c and μ (ev_a, ev_b describe screw threads), through the contact law record (contact_law.skin_law). Per piece: ``mu_scale`` (μ_across / μ of
 the material) and ``skin_ratio`` (μ_along / μ_across), which eq. 6 takes as ‖e_v‖ with
 ê_v the skin axis: friction −F_n μ (s + (‖e_v‖ − 1)(s·ê)ê) is μ_along along the axis
 and μ_across across it.
@@ -19,25 +19,31 @@ from __future__ import annotations
 from numba import njit
 
 from ..kernel_args import record
-from ..kernel_reductions import np_sum, same_bits
-from ..materials import MU, C, K
+from ..kernel_reductions import same_bits
+from .contact_law import add_slip, begin_law, finish_law, skin_law
+from .jacobian_kernels import body_jacobian_blocks
 from .kernels_numba import add_wrench, point_contact_force
 from ..multibody.pose_quaternions import pose_rotation
-from .plane_kernels import plane_active, plane_query
+from .evaluation_kernels import count_evaluation
+from .plane_kernels import plane_broad_phase, plane_query
 from .point_kernels import link_fixed_points, sample_points, world_axis
 
 
 @njit(cache=True)
 def body_contact_wrenches(m, distance, normal, material, sample, owner, poses, vels, piece_link, axis_B, mu_scale,
-                          skin_ratio, mats, v_eps, mode, ev_floor, R, out_point, out_vel, out_force, out_fn,
-                          out_wrench, out_link_fn):
+                          skin_ratio, mats, law, R, out_point, out_vel, out_force, out_fn, out_wrench, out_link_fn):
     """Forces on the first m samples (world points in out_point already) and their wrenches about each
     link's origin. A sample with φ < 0 is a contact of depth d = −φ, terrain normal n̂; its velocity
     v = v_l + ω_l × (p − o_l); F_n = max(0, k d − c v·n̂) (eq. 2); friction by eq. 6 with ê_v the skin
-    axis (R_l axis_B), μ = μ_material · mu_scale, ‖e_v‖ = skin_ratio. Wrench [f, (p − o_l) × f] into
-    out_wrench[l] (zeroed first). Returns the number of samples in contact."""
+    axis (R_l axis_B), μ = μ_material · mu_scale, ‖e_v‖ = skin_ratio, each scaled by the contact law
+    record ``law`` (contact_law.skin_law; its rows are links; begin_law checks it and adds its sinkage to
+    the distances here, first; its slip outputs are written here). Wrench [f, (p − o_l) × f] into out_wrench[l] (zeroed first).
+    Returns the number of samples in contact."""
     out_wrench[:, :] = 0.0
     out_link_fn[:] = 0.0
+    begin_law(law, m, distance, owner)
+    law_mu, law_ev, power, speed, row_fn = law.mu_scale, law.ev_scale, law.slip_power, law.slip_speed, law.row_fn
+    v_eps, mode, ev_floor = law.v_eps, law.mode, law.ev_floor
     n_contact = 0
     for i in range(m):
         d = -distance[i]
@@ -59,14 +65,16 @@ def body_contact_wrenches(m, distance, normal, material, sample, owner, poses, v
         vz = vels[b, 2] + (wx * ry - wy * rx)
         out_vel[i, 0], out_vel[i, 1], out_vel[i, 2] = vx, vy, vz
         ax, ay, az = world_axis(R, axis_B, q)
-        mat = material[i]
-        fn, fx, fy, fz = point_contact_force(
-            d, normal[i, 0], normal[i, 1], normal[i, 2], vx, vy, vz, ax, ay, az, mats[mat, K], mats[mat, C],
-            mats[mat, MU] * mu_scale[k], skin_ratio[k], 0.0, v_eps, mode, ev_floor)
+        kk, c, mu, ev_a, ev_b = skin_law(mats, material[i], mu_scale[k], skin_ratio[k], law_mu[b], law_ev[b])
+        nx, ny, nz = normal[i, 0], normal[i, 1], normal[i, 2]
+        fn, fx, fy, fz = point_contact_force(d, nx, ny, nz, vx, vy, vz, ax, ay, az, kk, c, mu, ev_a, ev_b, v_eps, mode,
+                                             ev_floor)
         out_fn[i] = fn
         out_force[i, 0], out_force[i, 1], out_force[i, 2] = fx, fy, fz
         out_link_fn[b] += fn
+        add_slip(power, speed, row_fn, b, fn, fx, fy, fz, nx, ny, nz, vx, vy, vz)
         add_wrench(out_wrench, b, rx, ry, rz, fx, fy, fz)
+    finish_law(law)
     return n_contact
 
 
@@ -78,46 +86,24 @@ def body_contact_wrenches(m, distance, normal, material, sample, owner, poses, v
 # work.counts: [evaluations, pieces tested, samples queried, active pieces, samples m of the last evaluation]
 
 BodyTable = record("BodyTable", ("broad_phase", "piece_link", "centre_B", "piece_r", "start", "points_B", "axis_B",
-                                 "mu_scale", "skin_ratio", "v_eps", "mode", "ev_floor"))
+                                 "mu_scale", "skin_ratio"))
 BodyWork = record("BodyWork", ("active", "centres", "points", "distance", "normal", "material", "sample", "owner", "R",
                                "vel", "force", "fn", "counts", "track", "seen_poses", "seen_vels"))
-BodyPorts = record("BodyPorts", ("poses", "vels", "wrenches", "link_fn", "normal_force", "contacts"))
-
-
-@njit(cache=True)
-def _finish(work, ports, n_active, m, n_contact):
-    c = work.counts
-    c[0] += 1
-    c[1] += n_active
-    c[2] += m
-    c[3] = n_active
-    c[4] = m
-    ports.contacts[0] = n_contact
-    ports.normal_force[0] = np_sum(ports.link_fn)
-    if work.track:
-        work.seen_poses[:] = ports.poses
-        work.seen_vels[:] = ports.vels
+BodyPorts = record("BodyPorts", ("poses", "vels", "wrenches", "link_fn", "normal_force", "contacts", "law"))
 
 
 @njit(cache=True)
 def _wrenches(t, w, io, mats, m):
     return body_contact_wrenches(m, w.distance, w.normal, w.material, w.sample, w.owner, io.poses, io.vels,
-                                 t.piece_link, t.axis_B, t.mu_scale, t.skin_ratio, mats, t.v_eps, t.mode,
-                                 t.ev_floor, w.R, w.points, w.vel, w.force, w.fn, io.wrenches, io.link_fn)
+                                 t.piece_link, t.axis_B, t.mu_scale, t.skin_ratio, mats, io.law, w.R, w.points, w.vel, w.force, w.fn, io.wrenches, io.link_fn)
 
 
 @njit(cache=True)
 def body_plane_step(table, work, ports, surface):
     """One whole evaluation against a plane: broad phase, sample points, plane query, forces, outputs."""
     t, w, io, f = table, work, ports, surface
-    npc = t.piece_link.shape[0]
-    if t.broad_phase:
-        link_fixed_points(io.poses, t.piece_link, t.centre_B, w.R, w.centres)
-        n_active = plane_active(w.centres, t.piece_r, f.origin, f.n, w.active)
-    else:
-        for k in range(npc):
-            w.active[k] = k
-        n_active = npc
+    n_active = plane_broad_phase(t.broad_phase, io.poses, t.piece_link, t.centre_B, t.piece_r, f.origin, f.n, w.R,
+                                 w.centres, w.active)
     m = 0
     if n_active:
         m = sample_points(io.poses, w.active, n_active, t.start, t.points_B, t.piece_link, w.R, w.points,
@@ -125,7 +111,7 @@ def body_plane_step(table, work, ports, surface):
         plane_query(m, w.points, f.origin, f.n, w.distance, w.normal, w.material)
         for i in range(m):
             w.material[i] = f.region_material
-    _finish(w, io, n_active, m, _wrenches(t, w, io, f.mats, m))
+    count_evaluation(w, io, n_active, m, _wrenches(t, w, io, f.mats, m), io.link_fn)
 
 
 @njit(cache=True)
@@ -150,7 +136,17 @@ def body_sample_step(table, work, ports):
 def body_wrench_step(table, work, ports, surface):
     """Forces and wrenches of the m samples queried (distance, normal, material filled in), outputs."""
     m = work.counts[4]
-    _finish(work, ports, work.counts[3], m, _wrenches(table, work, ports, surface.mats, m))
+    count_evaluation(work, ports, work.counts[3], m, _wrenches(table, work, ports, surface.mats, m), ports.link_fn)
+
+
+@njit(cache=True)
+def body_jacobian_step(table, work, ports, surface, d_twist, d_pose, on_link):
+    """jacobian_kernels.body_jacobian_blocks on the last evaluation's contacts (work), from the records.
+    Returns the number of links marked."""
+    t, w = table, work
+    return body_jacobian_blocks(w.counts[4], w.distance, w.normal, w.material, w.sample, w.owner, w.points, w.vel,
+                                ports.poses, t.piece_link, t.axis_B, t.mu_scale, t.skin_ratio, surface.mats, ports.law,
+                                d_twist, d_pose, on_link)
 
 
 @njit(cache=True)

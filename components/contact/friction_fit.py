@@ -32,6 +32,8 @@ import numpy as np
 from snakesim.components.materials import Material
 from snakesim.framework import SnakesimError
 
+from ..csv_numbers import finite_number
+
 COLUMNS = ("normal_force", "direction", "drag_force")
 DIRECTIONS = ("parallel", "normal")
 MIN_PARALLEL, MIN_NORMAL = 1, 3
@@ -102,14 +104,7 @@ def read_drag_tests(path) -> DragTests:
             raise FrictionDataError(f"{path}:{lineno}: {len(cells)} value(s), header has {len(names)} columns")
 
         def number(col):
-            raw = cells[idx[col]]
-            try:
-                val = float(raw)
-            except ValueError:
-                raise FrictionDataError(f"{path}:{lineno}: column '{col}': {raw!r} is not a number") from None
-            if not math.isfinite(val):
-                raise FrictionDataError(f"{path}:{lineno}: column '{col}': {raw!r} is not finite")
-            return val
+            return finite_number(cells[idx[col]], f"{path}:{lineno}: column '{col}'", FrictionDataError)
 
         f = number("normal_force")
         if f <= 0:

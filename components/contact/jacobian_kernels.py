@@ -27,8 +27,8 @@ import math
 import numpy as np
 from numba import njit
 
-from ..materials import EV_A, EV_B, MU, C, K
 from ..multibody.pose_quaternions import pose_rotation
+from .contact_law import material_law, skin_law
 from .point_kernels import world_axis
 
 
@@ -167,11 +167,11 @@ def _clear_marked(d_twist, d_pose, on_link):
 
 @njit(cache=True)
 def contact_jacobian_blocks(m, distance, normal, material, owner, point, vel, poses, axis_B, screw_row,
-                            parent_row, lead_angle, hand, mats, v_eps, mode, ev_floor, near, lookahead_time, d_twist,
-                            d_pose, on_link):
+                            parent_row, lead_angle, hand, mats, law, near, lookahead_time, d_twist, d_pose, on_link):
     """Per screw link, Σ over its samples in contact of X_cᵀ ∂F/∂v X_c and X_cᵀ ∂F/∂p_s X_c (about the
     screw link's origin, world axes), from the last evaluation's per-sample results (point = p_c,
-    vel = v). A sample not yet touching (gap under ``near``) whose gap closes within ``lookahead_time`` at its approach speed
+    vel = v), with the law the forces took (the contact law record ``law``, contact_law.py: its μ and ‖e_v‖
+    scales; the distances already carry its sinkage). A sample not yet touching (gap under ``near``) whose gap closes within ``lookahead_time`` at its approach speed
     (its p_c and v are there: contact_wrenches' ``near`` rows) adds its normal spring-damper slopes too:
     a step that starts with the contact open then meets it implicitly, as a joint stop's look-ahead
     does (joint_stops.py), instead of integrating k and c explicitly over the step that makes contact.
@@ -188,6 +188,7 @@ def contact_jacobian_blocks(m, distance, normal, material, owner, point, vel, po
     vv = np.empty(3)
     gk = np.empty(3)
     count = 0
+    mu_scale, ev_scale, v_eps, mode, ev_floor = law.mu_scale, law.ev_scale, law.v_eps, law.mode, law.ev_floor
     last = -1                  # rows come grouped by screw: its axis and thread once per screw
     o = 0
     a0 = a1 = a2 = cl = sl = 0.0
@@ -222,9 +223,8 @@ def contact_jacobian_blocks(m, distance, normal, material, owner, point, vel, po
             u0, u1, u2 = u0 / un, u1 / un, u2 / un
         cx, cy, cz = a1 * u2 - a2 * u1, a2 * u0 - a0 * u2, a0 * u1 - a1 * u0
         e[0], e[1], e[2] = cl * a0 - sl * cx, cl * a1 - sl * cy, cl * a2 - sl * cz
-        mat = material[i]
-        if point_jacobian(d, nrm, vv, e, mats[mat, K], mats[mat, C], mats[mat, MU], mats[mat, EV_A],
-                          mats[mat, EV_B], v_eps, mode, ev_floor, ahead, Dv, Dp, W, gk):
+        k, c, mu, ev_a, ev_b = material_law(mats, material[i], mu_scale[s], ev_scale[s])
+        if point_jacobian(d, nrm, vv, e, k, c, mu, ev_a, ev_b, v_eps, mode, ev_floor, ahead, Dv, Dp, W, gk):
             add_lever_quadratic(rc, Dv, d_twist[o])
             add_lever_rank1(rc, gk, nrm, d_pose[o])           # X_cᵀ (gk ⊗ n̂) X_c
         if not on_link[o]:
@@ -235,11 +235,12 @@ def contact_jacobian_blocks(m, distance, normal, material, owner, point, vel, po
 
 @njit(cache=True)
 def body_jacobian_blocks(m, distance, normal, material, sample, owner, point, vel, poses, piece_link, axis_B,
-                         mu_scale, skin_ratio, mats, v_eps, mode, ev_floor, d_twist, d_pose, on_link):
+                         mu_scale, skin_ratio, mats, law, d_twist, d_pose, on_link):
     """Body contact (body_kernels.body_contact_wrenches): per link, Σ over its samples in contact of
     X_pᵀ ∂F/∂v X_p and X_pᵀ ∂F/∂p X_p about the link's origin (world axes), X_p = [I, −[p − o_l]×].
     The body law is point_jacobian's with ê the skin axis R_l axis_B (projected on the tangent plane
-    inside), μ = μ_material · mu_scale, κ = skin_ratio (ev_b = 0: no load dependence). The sample is
+    inside), μ and κ from contact_law.skin_law as the forces took them (μ_material · mu_scale · the law's μ
+    scale, κ = skin_ratio · its ‖e_v‖ scale; ev_b = 0: no load dependence). The sample is
     fixed in the link, so its depth moves with it (δp = X_p δ_l). Blocks of links marked in on_link are
     overwritten, others untouched; returns the number of links marked."""
     _clear_marked(d_twist, d_pose, on_link)
@@ -253,6 +254,7 @@ def body_jacobian_blocks(m, distance, normal, material, sample, owner, point, ve
     vv = np.empty(3)
     gk = np.empty(3)
     count = 0
+    law_mu, law_ev, v_eps, mode, ev_floor = law.mu_scale, law.ev_scale, law.v_eps, law.mode, law.ev_floor
     for i in range(m):
         d = -distance[i]
         if not d > 0.0:
@@ -267,9 +269,8 @@ def body_jacobian_blocks(m, distance, normal, material, sample, owner, point, ve
             nrm[j] = normal[i, j]
             vv[j] = vel[i, j]
             rc[j] = point[i, j] - poses[b, j]
-        mat = material[i]
-        if point_jacobian(d, nrm, vv, e, mats[mat, K], mats[mat, C], mats[mat, MU] * mu_scale[k], skin_ratio[k],
-                          0.0, v_eps, mode, ev_floor, False, Dv, Dp, W, gk):
+        kk, c, mu, ev_a, ev_b = skin_law(mats, material[i], mu_scale[k], skin_ratio[k], law_mu[b], law_ev[b])
+        if point_jacobian(d, nrm, vv, e, kk, c, mu, ev_a, ev_b, v_eps, mode, ev_floor, False, Dv, Dp, W, gk):
             add_lever_quadratic(rc, Dv, d_twist[b])
             add_lever_rank1(rc, gk, nrm, d_pose[b])
         if not on_link[b]:

@@ -38,22 +38,27 @@ def plane_active(centres, radii, origin, n, out_active):
 
 
 @njit(cache=True)
+def plane_broad_phase(broad_phase, poses, owner_link, centre_B, radii, origin, n, R, centres, active):
+    """The owners (screws, body pieces) whose bounding sphere (centre_B fixed in link owner_link, radius
+    radii) reaches the plane, into active; every owner without ``broad_phase``. Returns how many."""
+    if broad_phase:
+        link_fixed_points(poses, owner_link, centre_B, R, centres)
+        return plane_active(centres, radii, origin, n, active)
+    for k in range(owner_link.shape[0]):
+        active[k] = k
+    return owner_link.shape[0]
+
+
+@njit(cache=True)
 def plane_contact_step(broad_phase, origin, n, region_material, sphere_r, start, points_B, mount_p, active, centres,
                        points, distance, normal, material, sample, owner, poses, vels, joint_v, ringc_B, radial_B, axis_B,
-                       parent_row, screw_row, radius, lead_angle, hand, spin_dof, spin_mult, mats, v_eps, mode,
-                       ev_floor, R, out_point, out_vel, out_force, out_fn, out_wrench, out_screw_fn):
+                       parent_row, screw_row, radius, lead_angle, hand, spin_dof, spin_mult, mats, law, R, out_point,
+                       out_vel, out_force, out_fn, out_wrench, out_screw_fn):
     """One contact evaluation against a plane in one call (the screw_sdf hot path, one dispatch):
     broad phase (link_fixed_points + plane_active, or every screw), sample_points, plane_query and
     contact_wrenches, exactly as the component calls them one by one for other terrains.
     Returns (screws tested, samples queried m, samples in contact)."""
-    ns = parent_row.shape[0]
-    if broad_phase:
-        link_fixed_points(poses, parent_row, mount_p, R, centres)
-        n_active = plane_active(centres, sphere_r, origin, n, active)
-    else:
-        for s in range(ns):
-            active[s] = s
-        n_active = ns
+    n_active = plane_broad_phase(broad_phase, poses, parent_row, mount_p, sphere_r, origin, n, R, centres, active)
     m = 0
     if n_active:
         m = sample_points(poses, active, n_active, start, points_B, parent_row, R, points, sample, owner)
@@ -62,8 +67,8 @@ def plane_contact_step(broad_phase, origin, n, region_material, sphere_r, start,
             material[i] = region_material
     n_contact = contact_wrenches(m, distance, normal, material, sample, owner, poses, vels, joint_v, ringc_B,
                                  radial_B, axis_B, parent_row, screw_row, radius, lead_angle, hand, spin_dof,
-                                 spin_mult, mats, v_eps, mode, ev_floor, 0.0, R, out_point, out_vel, out_force,
-                                 out_fn, out_wrench, out_screw_fn)
+                                 spin_mult, mats, law, 0.0, R, out_point, out_vel, out_force, out_fn, out_wrench,
+                                 out_screw_fn)
     return n_active, m, n_contact
 
 
@@ -119,14 +124,8 @@ def plane_extremal_step(samples, work, ports, surface):
     """plane_contact_step with exact rings (ring_contact="extremal"): broad phase, plane_rings, then
     contact_wrenches, in one call."""
     s, w, io, f = samples, work, ports, surface
-    ns = s.parent_row.shape[0]
-    if s.broad_phase:
-        link_fixed_points(io.poses, s.parent_row, s.mount_p, w.R, w.centres)
-        n_active = plane_active(w.centres, s.sphere_r, f.origin, f.n, w.active)
-    else:
-        for a in range(ns):
-            w.active[a] = a
-        n_active = ns
+    n_active = plane_broad_phase(s.broad_phase, io.poses, s.parent_row, s.mount_p, s.sphere_r, f.origin, f.n, w.R,
+                                 w.centres, w.active)
     m = 0
     if n_active:
         m = plane_rings(io.poses, w.active, n_active, s.start, s.points_B, s.ring_start, s.ring_first, s.ringc_B,
@@ -136,8 +135,8 @@ def plane_extremal_step(samples, work, ports, surface):
             w.material[i] = f.region_material
     n_contact = contact_wrenches(m, w.distance, w.normal, w.material, w.sample, w.owner, io.poses, io.vels,
                                  io.joint_v, s.ringc_B, s.radial_B, s.axis_B, s.parent_row, s.screw_row, s.radius,
-                                 s.lead_angle, s.hand, s.spin_dof, s.spin_mult, f.mats, s.v_eps, s.mode, s.ev_floor,
-                                 s.near, w.R, w.point, w.vel, w.force, w.fn, io.wrenches, io.screw_fn)
+                                 s.lead_angle, s.hand, s.spin_dof, s.spin_mult, f.mats, io.law, s.near, w.R, w.point,
+                                 w.vel, w.force, w.fn, io.wrenches, io.screw_fn)
     finish_evaluation(w, io, n_active, m, n_contact)
 
 
@@ -149,6 +148,6 @@ def plane_step(samples, work, ports, surface):
         s.broad_phase, f.origin, f.n, f.region_material, s.sphere_r, s.start, s.points_B, s.mount_p, w.active,
         w.centres, w.points, w.distance, w.normal, w.material, w.sample, w.owner, io.poses, io.vels, io.joint_v,
         s.ringc_B, s.radial_B, s.axis_B, s.parent_row, s.screw_row, s.radius, s.lead_angle, s.hand, s.spin_dof,
-        s.spin_mult, f.mats, s.v_eps, s.mode, s.ev_floor, w.R, w.point, w.vel, w.force, w.fn, io.wrenches,
+        s.spin_mult, f.mats, io.law, w.R, w.point, w.vel, w.force, w.fn, io.wrenches,
         io.screw_fn)
     finish_evaluation(w, io, n_active, m, n_contact)

@@ -18,17 +18,17 @@ import math
 from numba import njit
 
 from ..kernel_args import record
-from ..kernel_reductions import np_sum
-from ..materials import EV_A, EV_B, MU, C, K
 from ..multibody.pose_quaternions import pose_rotation
+from .evaluation_kernels import count_evaluation
+from .contact_law import add_slip, begin_law, finish_law, material_law
 from .kernels_numba import add_wrench, point_contact_force
 from .point_kernels import world_axis
 
 
 @njit(cache=True)
 def contact_wrenches(m, distance, normal, material, sample, owner, poses, vels, joint_v, ringc_B, radial_B, axis_B,
-                     parent_row, screw_row, radius, lead_angle, hand, spin_dof, spin_mult, mats, v_eps, mode,
-                     ev_floor, near, R, out_point, out_vel, out_force, out_fn, out_wrench, out_screw_fn):
+                     parent_row, screw_row, radius, lead_angle, hand, spin_dof, spin_mult, mats, law, near, R,
+                     out_point, out_vel, out_force, out_fn, out_wrench, out_screw_fn):
     """Forces on the first m samples and their wrenches about each screw link's origin o_S.
 
     A sample in contact (φ < 0) gives the depth d = −φ and the terrain normal n̂. The
@@ -43,13 +43,18 @@ def contact_wrenches(m, distance, normal, material, sample, owner, poses, vels, 
 
     so the sampling sets only where and how deep the contact is, never a spurious
     normal velocity or spin torque from a sample that lies off the envelope's lowest line.
-    Wrench [f, (p_c − o_S) × f] into out_wrench[screw_row[s]] (zeroed first). Writes
+    k, c, μ, ‖e_v‖ come from the material row through the contact law record ``law`` (contact_law.py: its
+    per-screw μ and ‖e_v‖ scales; begin_law checks its inputs and adds its sinkage to the first m distances
+    here, first; its slip outputs are written here). Wrench [f, (p_c − o_S) × f] into out_wrench[screw_row[s]] (zeroed first). Writes
     out_point (p_c), out_vel, out_force, out_fn for samples in contact, and p_c and v (no force) for samples
     within ``near`` of the surface (the implicit step's look-ahead: jacobian_kernels.contact_jacobian_blocks);
     zeros elsewhere. Returns the number of samples in contact.
     """
     out_wrench[:, :] = 0.0
     out_screw_fn[:] = 0.0
+    begin_law(law, m, distance, owner)
+    mu_scale, ev_scale, power, speed, row_fn = law.mu_scale, law.ev_scale, law.slip_power, law.slip_speed, law.row_fn
+    v_eps, mode, ev_floor = law.v_eps, law.mode, law.ev_floor
     n_contact = 0
     last = -1                  # rows come grouped by screw: its rotation, axis and thread once per screw
     b = 0
@@ -101,23 +106,26 @@ def contact_wrenches(m, distance, normal, material, sample, owner, poses, vels, 
             out_force[i, 0], out_force[i, 1], out_force[i, 2] = 0.0, 0.0, 0.0
             continue
         n_contact += 1
-        mat = material[i]
+        k, cd, mu, ev_a, ev_b = material_law(mats, material[i], mu_scale[s], ev_scale[s])
         # ê_v: normal to the thread line at p_c (lead angle, hand; cl, sl above), projected in the kernel
         fn, fx, fy, fz = point_contact_force(
             d, nx, ny, nz, vx, vy, vz, cl * ax - sl * cx, cl * ay - sl * cy, cl * az - sl * cz,
-            mats[mat, K], mats[mat, C], mats[mat, MU], mats[mat, EV_A], mats[mat, EV_B], v_eps, mode, ev_floor)
+            k, cd, mu, ev_a, ev_b, v_eps, mode, ev_floor)
         out_fn[i] = fn
         out_force[i, 0], out_force[i, 1], out_force[i, 2] = fx, fy, fz
         out_screw_fn[s] += fn
+        add_slip(power, speed, row_fn, s, fn, fx, fy, fz, nx, ny, nz, vx, vy, vz)
         o = screw_row[s]
         add_wrench(out_wrench, o, px - poses[o, 0], py - poses[o, 1], pz - poses[o, 2], fx, fy, fz)
+    finish_law(law)
     return n_contact
 
 
 # -- the component's kernels, on argument records (kernel_args.py) ----------------------------------
 #   samples  Samples        the sample tables and contact parameters (built once per component)
 #   work     SdfWork        this run's per-sample scratch, the counters and what the last evaluation saw
-#   ports    SdfPorts       this run's input views and output buffers (or scratch outputs)
+#   ports    SdfPorts       this run's input views and output buffers (or scratch outputs), and the contact
+#                           law record (contact_law.py) on the same inputs and outputs
 #   surface  Surface        per terrain object: the material table and, for a plane, its origin,
 #                           normal and material
 # work.counts: [evaluations, screws tested, samples queried, active screws, samples m of the last
@@ -125,29 +133,18 @@ def contact_wrenches(m, distance, normal, material, sample, owner, poses, vels, 
 
 Samples = record("Samples", ("broad_phase", "sphere_r", "start", "points_B", "mount_p", "ringc_B", "radial_B",
                              "axis_B", "parent_row", "screw_row", "radius", "lead_angle", "hand", "spin_dof",
-                             "spin_mult", "v_eps", "mode", "ev_floor", "ring_start", "ring_first", "cos_sep",
-                             "near", "lookahead_time"))
+                             "spin_mult", "ring_start", "ring_first", "cos_sep", "near", "lookahead_time"))
 SdfWork = record("SdfWork", ("active", "centres", "points", "distance", "normal", "material", "sample", "owner", "R",
                              "point", "vel", "force", "fn", "counts", "track", "seen_poses", "seen_vels",
                              "seen_joint_v", "ring_row", "ring_dir", "ext_points", "ext_row", "ext_distance",
                              "ext_normal", "ext_material"))
-SdfPorts = record("SdfPorts", ("poses", "vels", "joint_v", "wrenches", "screw_fn", "normal_force", "contacts"))
+SdfPorts = record("SdfPorts", ("poses", "vels", "joint_v", "wrenches", "screw_fn", "normal_force", "contacts", "law"))
 Surface = record("Surface", ("origin", "n", "region_material", "mats"))
 
 
 @njit(cache=True)
 def finish_evaluation(work, ports, n_active, m, n_contact):
-    """The end of every evaluation: the counters (work.counts), the contact count and total normal force
-    outputs and, when tracked, the inputs this evaluation saw."""
-    c = work.counts
-    c[0] += 1
-    c[1] += n_active
-    c[2] += m
-    c[3] = n_active
-    c[4] = m
-    ports.contacts[0] = n_contact
-    ports.normal_force[0] = np_sum(ports.screw_fn)
-    if work.track:          # what this evaluation saw, so the contact set can tell whether it describes its inputs
-        work.seen_poses[:] = ports.poses
-        work.seen_vels[:] = ports.vels
+    """The end of every evaluation (evaluation_kernels.count_evaluation), the spin rates seen included."""
+    count_evaluation(work, ports, n_active, m, n_contact, ports.screw_fn)
+    if work.track:
         work.seen_joint_v[:] = ports.joint_v

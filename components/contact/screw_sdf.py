@@ -54,6 +54,11 @@ sqrt(r² + (L/2)²) + margin) against ``terrain.distance_lower_bound``; only scr
 bound is ≤ 0 are sampled and queried, so a robot far from every surface costs one
 sphere query per screw.
 
+Contact law inputs and outputs (contact_law.py), per screw: ``screw_mu_scale`` (μ × it),
+``screw_ev_scale`` (‖e_v‖ × it), ``screw_sinkage`` (m, the surface lowered under the screw: a groove)
+in, ``screw_slip_power`` (W, friction's dissipation) and ``screw_slip_speed`` (m/s, load-weighted) out,
+so a thermal or terramechanics model wires to the screws without another back end.
+
 Material: the terrain's per-sample material (snakesim.components.materials.Material: k, c,
 μ, ev_a, ev_b); any field of ``material`` (a MaterialPatch) overrides it for every terrain
 material. The table the kernels read is packed once per terrain object (material_table),
@@ -65,12 +70,16 @@ in   link_poses[nl,7]       multibody link_poses (xyz + quaternion xyzw, world)
      link_velocities[nl,6]  multibody link_velocities ([v origin, ω], world)
      joint_v[nj]            rad/s, multibody joint_v (screw spin rates)
      terrain                structured Terrain (terrain component)
+     screw_mu_scale[ns]     1, default 1; screw_ev_scale[ns] 1, default 1; screw_sinkage[ns] m, default 0
 out  wrenches[nl,6]         N, N·m: to multibody.wrenches ([f, τ] world, about each link origin)
      normal_force[1]        N, Σ F_n over all contacts
      contacts[1]            number of contacts (rings' extremal points and samples)
      screw_normal_force[ns] N, Σ F_n per screw (metadata order)
+     screw_slip_power[ns]   W, Σ −F_t·v per screw;  screw_slip_speed[ns] m/s, Σ F_n‖v_t‖ / Σ F_n
      contact_set            ContactSet of the active contacts (computed once per step)
-all feedthrough from all inputs.
+all feedthrough from all inputs. The ports, the terrain switching, the contact set and the depth watch
+are every back end's (link_contact.py); the run, its records and the law check the sampled back ends'
+(sampled_contact.py).
 
 Robot: the multibody's RobotModel, handed over at build time; the screw layout is
 derived from it once per robot (robot_screws.py), so link rows and DOF order agree.
@@ -78,48 +87,32 @@ derived from it once per robot (robot_screws.py), so link rows and DOF order agr
 
 from __future__ import annotations
 
-import functools
 from typing import Literal
 
 import numpy as np
 from pydantic import Field
 
-from snakesim.framework import Component, Input, Output, Params, Uses
-from snakesim.components.materials import MaterialPatch, material_table
-from snakesim.components.multibody.linearization import LinkWrenchJacobian
-from snakesim.components.multibody.robot_model import RobotModel
+from snakesim.framework import Input, Output
+from snakesim.components.multibody.robot_ports import joint_names, joint_shape
 
 from ..kernel_args import bind
-from ..kernel_reductions import least_distance
-from ..terrain.base import Terrain
-from .contact_set import ContactSet
-from .kernels import EV_FLOOR, MODES
 from .robot_screws import screw_layout
-from .screw_samples import ScrewContactSamples
+from .sampled_contact import (SampledContact, SampledContactParams, SampledContactRun, SampledKernels, law_ports,
+                              query_into)
+from .screw_contact_kernels import Samples, SdfPorts, SdfWork
 from .plane_kernels import plane_extremal_step, plane_step
-from .screw_contact_kernels import Samples, SdfPorts, SdfWork, Surface
+from .screw_samples import ScrewContactSamples
 from .sdf_kernels import (centres_step, jacobian_step, ring_extremal_step, ring_finish_step, ring_sample_step,
                           sample_step, seen_step, wrench_step)
 
 
-class ScrewSdfContactParams(Params):
-    max_depth: float | None = Field(0.03, gt=0, description="m; a contact deeper in the terrain stops the run (a "
-                                                            "step too large for k, or a material too soft: the "
-                                                            "weight sinks a screw by F/k, about a millimetre); "
-                                                            "None: no watch")
+class ScrewSdfContactParams(SampledContactParams):
     rings: int = Field(3, ge=1, description="rings of samples per screw, spread over its length")
     per_ring: int = Field(8, ge=1, description="samples per ring, evenly around the envelope")
     phase: float = Field(0.0, description="rad, rotates every ring about its axis (φ = 3π/2 is the joint frame's −z)")
-    material: MaterialPatch | None = Field(None, description="overrides the terrain materials' k, c, mu, ev_a, ev_b")
-    fn_max: float = Field(500.0, gt=0, description="N, top of the normal load per sample: ‖e_v‖ ≥ ev_floor up to it")
-    v_eps: float = Field(1e-3, ge=0, description="m/s, slip regularisation width")
-    regularisation: Literal["sqrt", "linear"] = "sqrt"
-    ev_floor: float = Field(EV_FLOOR, gt=0, description="smallest admissible ‖e_v‖")
     ring_contact: Literal["extremal", "samples"] = Field(
         "extremal", description="'extremal': each ring meets the terrain at its deepest point along the local "
         "normal (exact on curved terrain); 'samples': only where its samples do (sinks up to r(1 − cos(π/per_ring)))")
-    broad_phase: bool = True
-    margin: float = Field(0.0, ge=0, description="m added to each screw's bounding sphere")
     lookahead_gap: float = Field(0.01, ge=0, description="m: rings this close to the terrain, not yet touching, "
                                                          "are looked at for the implicit step's look-ahead")
     lookahead_time: float = Field(0.02, ge=0, description="s: a ring whose gap closes within this time at its "
@@ -127,23 +120,25 @@ class ScrewSdfContactParams(Params):
                                                           "step's Jacobian before it touches (0: only contacts)")
 
 
-class ScrewSdfContact(Component[ScrewSdfContactParams]):
-    type_name = "screw_sdf_contact"
-    #: query a plane (Terrain.fast_plane) in numba (tests and the bench switch it off to compare)
-    fast_plane = True
+def _per_screw(c):
+    return (c.screws.ns,)
 
-    robot = Uses(RobotModel)
-    link_poses = Input(shape=lambda c: (c.robot.nl, 7), unit=None)
-    link_velocities = Input(shape=lambda c: (c.robot.nl, 6), unit=None)
-    joint_v = Input(shape=lambda c: (c.robot.nj,), unit="rad/s", names=lambda c: c.robot.joints)
-    terrain = Input(type=Terrain)
-    wrenches = Output(shape=lambda c: (c.robot.nl, 6), unit=None, feedthrough=True,
-                      names=lambda c: tuple(f"{ln}.{k}" for ln in c.robot.links for k in ("fx", "fy", "fz", "tx", "ty", "tz")))
-    normal_force = Output(shape=(1,), unit="N", feedthrough=True)
-    contacts = Output(shape=(1,), unit="1", feedthrough=True)
-    screw_normal_force = Output(shape=lambda c: (c.screws.ns,), unit="N", feedthrough=True,
-                                names=lambda c: c.screws.names)
-    contact_set = Output(type=ContactSet, feedthrough=True, calc="calc_contact_set")
+
+def _screw_names(c):
+    return c.screws.names
+
+
+class ScrewSdfContact(SampledContact[ScrewSdfContactParams]):
+    type_name = "screw_sdf_contact"
+
+    joint_v = Input(shape=joint_shape, unit="rad/s", names=joint_names)
+    screw_normal_force = Output(shape=_per_screw, unit="N", feedthrough=True, names=_screw_names)
+    screw_mu_scale, screw_ev_scale, screw_sinkage, screw_slip_power, screw_slip_speed = law_ports(_per_screw,
+                                                                                                  _screw_names)
+
+    law_ports = ("screw_mu_scale", "screw_ev_scale", "screw_sinkage", "screw_slip_power", "screw_slip_speed")
+    depth_what = "screw link"
+    jacobian_inputs = ("link_poses", "link_velocities", "joint_v")
 
     @property
     def layout(self):
@@ -171,17 +166,23 @@ class ScrewSdfContact(Component[ScrewSdfContactParams]):
         #: rows of the per-contact arrays: the samples, then (exact rings) one per ring
         self.n_rows = self.n_samples + (self.n_rings if self.exact else 0)
         self._sphere_r = np.sqrt(lay.radius ** 2 + (0.5 * lay.length) ** 2) + p.margin + p.lookahead_gap
-        self._samples = Samples(
+        self.table = Samples(
             broad_phase=p.broad_phase, sphere_r=self._sphere_r,
             start=start, points_B=points_B,
             mount_p=lay.mount_p, ringc_B=np.ascontiguousarray(np.concatenate([s.points - s.radius * s.radial
                                                                               for s in samples])),
             radial_B=radial_B, axis_B=np.ascontiguousarray(lay.mount_R[:, :, 0]), parent_row=lay.parent_row,
             screw_row=lay.screw_row, radius=lay.radius, lead_angle=lay.lead_angle, hand=lay.hand,
-            spin_dof=lay.spin_dof, spin_mult=lay.spin_mult, v_eps=p.v_eps, mode=MODES[p.regularisation],
-            ev_floor=p.ev_floor, ring_start=ring_start, ring_first=ring_first.astype(np.int64),
+            spin_dof=lay.spin_dof, spin_mult=lay.spin_mult, ring_start=ring_start,
+            ring_first=ring_first.astype(np.int64),
             cos_sep=float(np.cos(min(2.0 * np.pi / p.per_ring, 0.5 * np.pi))), near=p.lookahead_gap,
             lookahead_time=p.lookahead_time)
+        self.kernels = SampledKernels(plane=plane_extremal_step if self.exact else plane_step, centres=centres_step,
+                                      sample=ring_sample_step if self.exact else sample_step, wrench=wrench_step,
+                                      seen=seen_step, jacobian=jacobian_step)
+        self.owner_link = lay.screw_row
+        self.law_row_of_owner = np.arange(lay.ns, dtype=np.int64)
+        self.law_row_names = lay.names
 
     def stiffness_hint(self, u, readers):
         """Penalty contact on the lightest screw, one point per ring at once (:mod:`.stiffness_hint`)."""
@@ -191,167 +192,50 @@ class ScrewSdfContact(Component[ScrewSdfContactParams]):
         return penalty_modes(self, u, [(int(lay.screw_row[s]), self.samples[s].rings) for s in range(lay.ns)],
                              "ring contact(s)")
 
-    def _material_table(self, terrain: Terrain) -> np.ndarray:
-        """The kernels' material table ([K, C, MU, EV_A, EV_B] per terrain material, ``material`` applied;
-        checked: ‖e_v‖ ≥ ev_floor up to fn_max), packed once per terrain object (the cache keeps it)."""
-        p = self.p
-        return material_table(terrain.materials, p.material, fn_max=p.fn_max, ev_floor=p.ev_floor, owner=self.name)
-
-    # -- this run's cache ------------------------------------------------------------------------
-    def make_cache(self, x, u, y):
-        """Per-sample scratch, the counters, and the kernels bound to this plan's port buffers (and, for
-        the contact set when the last evaluation saw other inputs, to scratch outputs)."""
-        return _Cache(self, u, y)
-
-    # -- hot path --------------------------------------------------------------------------------
-    def output(self, t, x, u, y):
-        c = u.cache
-        if u.terrain is not c.terrain:
-            c.use_terrain(self, u.terrain)
-        c.step()
-        if self.p.max_depth is not None and -c.deepest() > self.p.max_depth:
-            k = int(c.distance[:int(c.counts[4])].argmin())
-            link = self.robot.links[self.screws.screw_row[c.owner[k]]]
-            self.stop(f"contact on screw link '{link}' is {-c.distance[k] * 1e3:.3g} mm deep at t = {t:.6g} s, "
-                      f"beyond max_depth = {self.p.max_depth * 1e3:g} mm: the step is too large for the contact "
-                      f"stiffness (see the run's step_check) or the material too soft")
-
-    def port_jacobian(self, port, t, x, u, y):
-        """∂wrenches/∂(screw link twist, displacement): per screw link 6×6 blocks from the last
-        evaluation's contacts (jacobian_kernels.py), for linearly implicit integrators."""
-        c = u.cache
-        if port != "wrenches" or c.terrain is _UNSET:
-            return None
-        if c.jac is None:           # per terrain (use_terrain resets it): the blocks and the bound kernel
-            c.jac = _jacobian_call(self, c)
-        d_twist, d_pose, on, call = c.jac
-        call()
-        return LinkWrenchJacobian(rows=np.flatnonzero(on), d_twist=d_twist, d_pose=d_pose, inputs=_JAC_INPUTS)
-
-    def calc_contact_set(self, t, x, u, y):
-        c = u.cache
-        if u.terrain is not c.terrain:
-            c.use_terrain(self, u.terrain)
-            c.step_scratch()
-        elif not c.seen():          # the last evaluation was at other inputs
-            c.step_scratch()
-        m = int(c.counts[4])
-        on = np.flatnonzero(c.distance[:m] < 0.0)
-        y.contact_set = ContactSet(
-            t=float(t), points=c.point[on].copy(), normals=c.normal[on].copy(), forces=c.force[on].copy(),
-            normal_force=c.fn[on].copy(), depth=-c.distance[on], slip=c.vel[on].copy(),
-            link=self.screws.screw_row[c.owner[on]], material=c.material[on].copy(),
-            link_names=self.robot.links)
+    @property
+    def run_class(self):
+        return ScrewContactRun
 
 
-_UNSET = object()
-_JAC_INPUTS = ("link_poses", "link_velocities", "joint_v")
+class ScrewContactRun(SampledContactRun):
+    """One run of the screw contact: the sampled run's rows, plus the contact points p_c and (exact
+    rings) the rings' extremal points, queried after the samples (``after_query``)."""
 
-
-def _jacobian_call(comp: ScrewSdfContact, c) -> tuple:
-    """(d_twist, d_pose, on_link, call): the per-link blocks (zeroed) and sdf_kernels.jacobian_step bound to
-    them, the sample tables, this run's work and ports and the terrain's surface record."""
-    nl = comp.screws.nl
-    d_twist, d_pose, on = np.zeros((nl, 6, 6)), np.zeros((nl, 6, 6)), np.zeros(nl, dtype=np.bool_)
-    return d_twist, d_pose, on, bind(jacobian_step, comp._samples, c.work, c.ports, c.surface, d_twist, d_pose, on)
-
-
-class _Cache:
-    """One run's contact scratch and bound kernels (see ScrewSdfContact.make_cache).
-
-    ``terrain`` and ``mats``: the terrain object in use and its material table; ``stats``: evaluations,
-    and screws and samples sent to the narrow phase (tests and benches)."""
-
-    __slots__ = ("comp", "terrain", "mats", "surface", "step", "step_scratch", "work", "ports", "scratch_ports", "seen",
-                 "centres_call", "sample_call", "extremal_call", "finish_call", "ext_points", "ext_distance",
-                 "ext_normal", "ext_material", "counts", "active", "centres", "points", "distance", "normal",
-                 "material", "sample", "owner", "point", "vel", "force", "fn", "jac", "deepest")
+    owners_tested = "screws_tested"
 
     def __init__(self, comp: ScrewSdfContact, u, y):
-        lay, n, nr = comp.screws, comp.n_rows, comp.n_rings
-        self.comp = comp
-        self.jac = None                                            # port_jacobian's blocks, made on first use
-        self.terrain = _UNSET                                      # not even None: output() checks it first
-        self.mats = self.surface = self.step = self.step_scratch = None
-        self.active = np.arange(lay.ns, dtype=np.int64)           # every screw, unless the broad phase says
-        self.centres = np.zeros((lay.ns, 3))
-        self.points, self.point, self.vel, self.force = (np.zeros((n, 3)) for _ in range(4))
-        self.distance, self.normal, self.fn = np.zeros(n), np.zeros((n, 3)), np.zeros(n)
-        self.material, self.sample, self.owner = (np.zeros(n, dtype=np.int64) for _ in range(3))
-        self.counts = np.zeros(7, dtype=np.int64)      # [5] sample rows m (ring rows follow), [6] extremal points
+        nr = comp.n_rings
+        self.point = np.zeros((comp.n_rows, 3))
         self.ext_points, self.ext_normal = np.zeros((nr, 3)), np.zeros((nr, 3))
         self.ext_distance, self.ext_material = np.zeros(nr), np.zeros(nr, dtype=np.int64)
-        self.counts[3] = lay.ns
-        self.work = SdfWork(active=self.active, centres=self.centres, points=self.points, distance=self.distance,
-                            normal=self.normal, material=self.material, sample=self.sample, owner=self.owner,
-                            R=np.zeros((3, 3)), point=self.point, vel=self.vel, force=self.force, fn=self.fn,
-                            counts=self.counts, track="contact_set" in comp.used_outputs,
-                            seen_poses=np.full((lay.nl, 7), np.nan), seen_vels=np.full((lay.nl, 6), np.nan),
-                            seen_joint_v=np.full(lay.nj, np.nan), ring_row=np.zeros(n, dtype=np.int64),
-                            ring_dir=np.zeros((n, 3)), ext_points=self.ext_points, ext_row=np.zeros(nr, dtype=np.int64),
-                            ext_distance=self.ext_distance, ext_normal=self.ext_normal, ext_material=self.ext_material)
-        ins = dict(poses=u.link_poses, vels=u.link_velocities, joint_v=u.joint_v)
-        self.ports = SdfPorts(wrenches=y.wrenches, screw_fn=y.screw_normal_force, normal_force=y.normal_force,
-                              contacts=y.contacts, **ins)
-        self.scratch_ports = SdfPorts(wrenches=np.zeros((lay.nl, 6)), screw_fn=np.zeros(lay.ns),
-                                      normal_force=np.zeros(1), contacts=np.zeros(1), **ins)
-        self.seen = bind(seen_step, self.work, self.ports)
-        self.deepest = bind(least_distance, self.distance, self.counts)
-        self.centres_call = bind(centres_step, comp._samples, self.work, self.ports)
-        self.sample_call = bind(ring_sample_step if comp.exact else sample_step, comp._samples, self.work, self.ports)
-        self.extremal_call = bind(ring_extremal_step, comp._samples, self.work, self.ports)
-        self.finish_call = bind(ring_finish_step, comp._samples, self.work, self.ports)
+        super().__init__(comp, u, y, comp.n_rows, comp.screws.ns, comp._sphere_r, comp.law_ports)
+        self.extremal_call = bind(ring_extremal_step, comp.table, self.work, self.ports)
+        self.finish_call = bind(ring_finish_step, comp.table, self.work, self.ports)
 
     @property
-    def stats(self) -> dict:
-        return {"evaluations": int(self.counts[0]), "screws_tested": int(self.counts[1]),
-                "samples_queried": int(self.counts[2])}
+    def force_point(self):
+        return self.point
 
-    def use_terrain(self, comp: ScrewSdfContact, terrain) -> None:
-        """The terrain-dependent records (material table; a plane's origin and normal, queried in numba;
-        every other kind through Terrain.query), for each new terrain object."""
-        if terrain is None:
-            raise ValueError(f"{comp.name}: input 'terrain' carries no Terrain; connect a terrain component's "
-                             "'terrain' output to it")
-        self.jac = None                                            # its Jacobian call binds the new surface
-        self.mats = mats = comp._material_table(terrain)
-        fast = terrain.fast_plane() if comp.fast_plane else None     # the kind says: one plane
-        plane = fast is not None
-        self.surface = Surface(origin=np.array(fast[0] if plane else (0.0, 0.0, 0.0), dtype=float),
-                               n=np.array(fast[1] if plane else (0.0, 0.0, 1.0), dtype=float),
-                               region_material=int(terrain.region_material[0]) if plane else 0, mats=mats)
-        s = comp._samples
-        if plane:       # the whole evaluation in one numba call
-            kernel = plane_extremal_step if comp.exact else plane_step
-            self.step = bind(kernel, s, self.work, self.ports, self.surface)
-            self.step_scratch = bind(kernel, s, self.work, self.scratch_ports, self.surface)
-        else:
-            self.step = functools.partial(self._evaluate, bind(wrench_step, s, self.work, self.ports, self.surface))
-            self.step_scratch = functools.partial(self._evaluate, bind(wrench_step, s, self.work, self.scratch_ports,
-                                                                       self.surface))
-        self.terrain = terrain
+    def work_record(self, comp):
+        lay, n, nr = comp.screws, comp.n_rows, comp.n_rings
+        return SdfWork(active=self.active, centres=self.centres, points=self.points, distance=self.distance,
+                       normal=self.normal, material=self.material, sample=self.sample, owner=self.owner,
+                       R=np.zeros((3, 3)), point=self.point, vel=self.vel, force=self.force, fn=self.fn,
+                       counts=self.counts, track="contact_set" in comp.used_outputs,
+                       seen_poses=np.full((lay.nl, 7), np.nan), seen_vels=np.full((lay.nl, 6), np.nan),
+                       seen_joint_v=np.full(lay.nj, np.nan), ring_row=np.zeros(n, dtype=np.int64),
+                       ring_dir=np.zeros((n, 3)), ext_points=self.ext_points, ext_row=np.zeros(nr, dtype=np.int64),
+                       ext_distance=self.ext_distance, ext_normal=self.ext_normal, ext_material=self.ext_material)
 
-    def _evaluate(self, wrench) -> None:
-        """One evaluation on a terrain other than a plane: the broad phase, the samples' points,
-        Terrain.query, then the wrenches (``wrench``, bound to the outputs or to scratch)."""
-        terrain, comp = self.terrain, self.comp
-        if comp.p.broad_phase:
-            self.centres_call()
-            active = np.flatnonzero(terrain.distance_lower_bound(self.centres, comp._sphere_r) <= 0.0)
-            self.active[:active.size] = active
-            self.counts[3] = active.size
-        m = self.sample_call()
-        if m:
-            q = terrain.query(self.points[:m])
-            self.distance[:m] = q.distance
-            self.normal[:m] = q.normal
-            self.material[:m] = q.material
-            if comp.exact:          # the rings' extremal points, queried in turn
-                ne = self.extremal_call()
-                if ne:
-                    q = terrain.query(self.ext_points[:ne])
-                    self.ext_distance[:ne] = q.distance
-                    self.ext_normal[:ne] = q.normal
-                    self.ext_material[:ne] = q.material
-                self.finish_call()
-        wrench()
+    def ports_record(self, comp, u, y, law):
+        return SdfPorts(poses=u.link_poses, vels=u.link_velocities, joint_v=u.joint_v, wrenches=y.wrenches,
+                        screw_fn=y.screw_normal_force, normal_force=y.normal_force, contacts=y.contacts, law=law)
+
+    def after_query(self, terrain) -> None:
+        """Exact rings: the rings' extremal points, queried in turn, then the rings' rows."""
+        if not self.comp.exact:
+            return
+        ne = self.extremal_call()
+        if ne:
+            query_into(terrain, self.ext_points[:ne], self.ext_distance, self.ext_normal, self.ext_material)
+        self.finish_call()

@@ -87,8 +87,8 @@ def wrench_step(samples, work, ports, surface):
     m = w.counts[4]
     n_contact = contact_wrenches(m, w.distance, w.normal, w.material, w.sample, w.owner, io.poses, io.vels,
                                  io.joint_v, s.ringc_B, s.radial_B, s.axis_B, s.parent_row, s.screw_row, s.radius,
-                                 s.lead_angle, s.hand, s.spin_dof, s.spin_mult, surface.mats, s.v_eps, s.mode,
-                                 s.ev_floor, s.near, w.R, w.point, w.vel, w.force, w.fn, io.wrenches, io.screw_fn)
+                                 s.lead_angle, s.hand, s.spin_dof, s.spin_mult, surface.mats, io.law, s.near,
+                                 w.R, w.point, w.vel, w.force, w.fn, io.wrenches, io.screw_fn)
     finish_evaluation(w, io, w.counts[3], m, n_contact)
 
 
@@ -105,5 +105,5 @@ def jacobian_step(samples, work, ports, surface, d_twist, d_pose, on_link):
     (one bound call instead of twenty arguments typed per call). Returns the number of links marked."""
     s, w = samples, work
     return contact_jacobian_blocks(w.counts[4], w.distance, w.normal, w.material, w.owner, w.point, w.vel, ports.poses,
-                                   s.axis_B, s.screw_row, s.parent_row, s.lead_angle, s.hand, surface.mats, s.v_eps,
-                                   s.mode, s.ev_floor, s.near, s.lookahead_time, d_twist, d_pose, on_link)
+                                   s.axis_B, s.screw_row, s.parent_row, s.lead_angle, s.hand, surface.mats, ports.law,
+                                   s.near, s.lookahead_time, d_twist, d_pose, on_link)

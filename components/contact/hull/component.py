@@ -16,9 +16,9 @@ hull_contact:
          body_contacts[1]       body-to-body contacts (penetrating pairs)
          contact_set            ContactSet of the robot–terrain contacts (contact_set.py)
          (all feedthrough from all inputs)
-    The ports named as the SDF back end's (screw_sdf_contact) mean the same, so an
-    assembly swaps back ends by changing the type; both take the multibody's robot, and
-    the ``material`` override parameter is shared too.
+    The ports, the law's parameters (``material``, v_ε…), the terrain switching, the depth watch
+    (``max_depth``) and the contact set are every back end's (../link_contact.py), so an assembly
+    swaps back ends by changing the type.
 
 Geometry (robot_geometry.py, terrain_geometry.py, decompose.py): the URDF's collision
 shapes (screw envelope cylinders cut into ``cylinder_slices``, module cylinders, boxes;
@@ -41,6 +41,9 @@ Velocity of the robot's material point at a contact p on link l: v_l + ω_l × (
 a screw link's ω includes its spin. k is per contact (per colliding piece), as in the
 SDF back end per sample: a body resting on n pieces sinks d = W / (n k) (c ḋ = 0 at rest).
 
+Terrain geometry follows the terrain's state: a deformable kind's coal parts are meshed again when
+its state version moves (terrain/derived.py), the material table only for another terrain object.
+
 Broad phase: each piece's bounding sphere (centre, radius) in the world; a piece is
 tested against the terrain only when Terrain.distance_lower_bound(centre, radius) ≤ 0
 (one vectorised query for all pieces), a body pair only when the spheres overlap.
@@ -55,23 +58,21 @@ from typing import Literal
 import numpy as np
 from pydantic import Field
 
-from snakesim.framework import Component, Input, Output, Params, Uses
-from snakesim.components.materials import EV_A, EV_B, MU, C, K, MaterialPatch, material_table
+from snakesim.framework import Input, Output
+from snakesim.components.multibody.robot_ports import joint_names, joint_shape
+from snakesim.components.materials import EV_A, EV_B, MU, C, K
 from snakesim.components.multibody.pose_quaternions import rotation_matrices
-from snakesim.components.multibody.robot_model import RobotModel
-from snakesim.components.terrain import Terrain
+from snakesim.components.terrain.derived import TerrainDerived
 
-from ..contact_set import ContactSet
-from ..kernels import EV_FLOOR, MODES
+from ..kernels import MODES
 from ..kernels_numba import body_wrenches_nb, contact_forces_nb
+from ..link_contact import LinkContact, LinkContactParams
 from .narrow import Narrowphase
 from .robot_geometry import GeometryOptions, robot_geometry
 from .terrain_geometry import terrain_parts
 
 
-class HullContactParams(Params):
-    material: MaterialPatch | None = Field(None, description="overrides the terrain materials' k, c, mu, ev_a, ev_b")
-    fn_max: float = Field(500.0, gt=0, description="N, top of the normal load per contact: ‖e_v‖ ≥ ev_floor up to it")
+class HullContactParams(LinkContactParams):
     # geometry
     screw_geometry: Literal["envelope", "blades"] = Field(
         "envelope", description="screws as their envelope cylinder, or the blade mesh's convex hulls")
@@ -88,27 +89,14 @@ class HullContactParams(Params):
     body_stiffness: float = Field(1e5, gt=0, description="N/m")
     body_damping: float = Field(1e3, ge=0, description="N·s/m")
     body_mu: float = Field(0.3, ge=0)
-    # friction regularisation (kernels.py)
-    v_eps: float = Field(1e-3, ge=0, description="m/s")
-    regularisation: Literal["sqrt", "linear"] = "sqrt"
-    ev_floor: float = Field(EV_FLOOR, gt=0)
 
 
-class HullContact(Component[HullContactParams]):
+class HullContact(LinkContact[HullContactParams]):
     type_name = "hull_contact"
 
-    robot = Uses(RobotModel)
-    link_poses = Input(shape=lambda c: (c.robot.nl, 7), unit=None)
-    link_velocities = Input(shape=lambda c: (c.robot.nl, 6), unit=None)
-    joint_v = Input(shape=lambda c: (c.robot.nj,), unit="rad/s", default=0.0, names=lambda c: c.robot.joints)
-    terrain = Input(type=Terrain)
-    wrenches = Output(shape=lambda c: (c.robot.nl, 6), unit=None, feedthrough=True,
-                      names=lambda c: tuple(f"{ln}.{k}" for ln in c.robot.links for k in ("fx", "fy", "fz", "tx", "ty", "tz")))
-    normal_force = Output(shape=(1,), unit="N", feedthrough=True)
-    contacts = Output(shape=(1,), unit="1", feedthrough=True)
+    joint_v = Input(shape=joint_shape, unit="rad/s", default=0.0, names=joint_names)
     body_normal_force = Output(shape=(1,), unit="N", feedthrough=True)
     body_contacts = Output(shape=(1,), unit="1", feedthrough=True)
-    contact_set = Output(type=ContactSet, feedthrough=True, calc="calc_contact_set")
 
     def setup(self):
         p, robot = self.p, self.robot
@@ -124,8 +112,10 @@ class HullContact(Component[HullContactParams]):
     def make_cache(self, x, u, y) -> "HullRun":
         import coal
 
-        return HullRun([coal.Transform3s() for _ in range(self.geo.n_pieces)], Narrowphase(self.p.max_contacts),
-                       _Scratch(self.robot.nl))
+        p = self.p
+        return HullRun(self, [coal.Transform3s() for _ in range(self.geo.n_pieces)], Narrowphase(p.max_contacts),
+                       _Scratch(self.robot.nl), TerrainDerived(lambda terrain: terrain_parts(
+                           terrain, p.terrain_extent, p.terrain_segments, p.terrain_resolution)))
 
     # -- geometry in the world ---------------------------------------------------------
     def _pieces_world(self, poses):
@@ -139,11 +129,9 @@ class HullContact(Component[HullContactParams]):
 
     def _terrain_contacts(self, run, terrain, Rw, pw, cw):
         if terrain is not run.terrain:
-            p = self.p
-            run.parts = terrain_parts(terrain, p.terrain_extent, p.terrain_segments, p.terrain_resolution)
-            run.mats = material_table(terrain.materials, p.material, fn_max=p.fn_max, ev_floor=p.ev_floor,
-                                      owner=self.name)
+            run.mats = self.material_table(terrain)
             run.terrain = terrain
+        parts = run.parts.get(terrain)          # meshed again only when the terrain's state moved
         g = self.geo
         near = np.flatnonzero(terrain.distance_lower_bound(cw, g.sphere_r) <= 0.0)
         rows = []
@@ -151,7 +139,7 @@ class HullContact(Component[HullContactParams]):
             T = run.transforms[i]
             T.setRotation(Rw[i])
             T.setTranslation(pw[i])
-            for part in run.parts:
+            for part in parts:
                 hit = run.narrow.collide(g.geoms[i], T, part.geom, part.transform, part.triangles)
                 if hit is not None:
                     # coal's normal points from the robot into the terrain
@@ -190,10 +178,7 @@ class HullContact(Component[HullContactParams]):
 
     def output(self, t, x, u, y):
         p, run = self.p, u.cache
-        poses, vel, terrain = u.link_poses, u.link_velocities, u.terrain
-        if terrain is None:
-            raise ValueError(f"{self.name}: input 'terrain' carries no Terrain; connect a terrain component's "
-                             "'terrain' output to it")
+        poses, vel, terrain = u.link_poses, u.link_velocities, self.checked_terrain(u.terrain)
         R, Rw, pw, cw = self._pieces_world(poses)
         trows = self._terrain_contacts(run, terrain, Rw, pw, cw)
         brows = self._body_contacts(run, Rw, pw, cw) if p.body_contact and len(self.geo.pair_a) else []
@@ -247,33 +232,39 @@ class HullContact(Component[HullContactParams]):
                      "body_a": b_a, "body_b": b_b, "body_point": b_point, "body_normal": b_normal,
                      "body_depth": b_depth, "body_force": b_force, "body_fn": b_fn}
         run.seen = (terrain, poses.copy(), vel.copy())
-
-    def calc_contact_set(self, t, x, u, y):
-        run = u.cache
-        s = run.seen
-        if s is None or not (u.terrain is s[0] and np.array_equal(u.link_poses, s[1])
-                             and np.array_equal(u.link_velocities, s[2])):
-            self.output(t, x, u, run.scratch)    # the last evaluation was at other inputs
-        c = run.last
-        y.contact_set = ContactSet(t=float(t), points=c["point"].copy(), normals=c["normal"].copy(),
-                                   forces=c["force"].copy(), normal_force=c["fn"].copy(), depth=c["depth"].copy(),
-                                   slip=c["slip"].copy(), link=c["link"].copy(), material=c["material"].copy(),
-                                   link_names=self.robot.links)
+        if y is not run.scratch:
+            self.watch_depth(t, -t_depth, t_link)
 
 
 @dataclasses.dataclass
 class HullRun:
     """One run's hull state (``u.cache``): coal transforms moved every call, the narrow phase, the
-    terrain last packed (its parts and material table), the last evaluation and its inputs."""
+    terrain last packed (its material table; its coal parts, per state version), the last evaluation
+    and its inputs. Answers the contact set's questions (link_contact.ContactRun)."""
 
+    comp: HullContact
     transforms: list
     narrow: Narrowphase
     scratch: "_Scratch"
+    parts: TerrainDerived
     terrain: object = None
-    parts: list = dataclasses.field(default_factory=list)
     mats: np.ndarray | None = None
     last: dict = dataclasses.field(default_factory=dict)
     seen: tuple | None = None
+
+    def describes(self, u) -> bool:
+        s = self.seen
+        return s is not None and u.terrain is s[0] and np.array_equal(u.link_poses, s[1]) \
+            and np.array_equal(u.link_velocities, s[2])
+
+    def evaluate_scratch(self, t, x, u) -> None:
+        self.comp.output(t, x, u, self.scratch)
+
+    def active_contacts(self) -> dict:
+        c = self.last
+        return dict(points=c["point"].copy(), normals=c["normal"].copy(), forces=c["force"].copy(),
+                    normal_force=c["fn"].copy(), depth=c["depth"].copy(), slip=c["slip"].copy(),
+                    link=c["link"].copy(), material=c["material"].copy())
 
 
 class _Scratch:
