@@ -149,7 +149,7 @@ def run(assembly, config, sets, duration, dt, integrator, realtime, out_dir, ove
     code per kind of failure otherwise (summary.json: outcome, failure_kind): EXIT_CODES. Ctrl-C or
     SIGTERM ends the run at the next step and still writes --out (the summary says it was interrupted,
     and when), exit 128 + signal; a second one stops at once."""
-    from .run_files import check_writable_file, prepare_out_dir
+    from .run_files import check_writable_file, prepare_out_dir, release_out_dir
 
     with _Interrupts() as interrupts:
         try:
@@ -176,6 +176,9 @@ def run(assembly, config, sets, duration, dt, integrator, realtime, out_dir, ove
             click.echo(f"\ninterrupted twice: stopped at once{'' if not out_dir else f'; {out_dir} may be incomplete'}",
                        err=True)
             sys.exit(130)
+        finally:
+            if out_dir:
+                release_out_dir(out_dir)     # this process's claim of the folder (run_files.py), if it holds one
     sm = result.summary
     code = run_exit_code(sm)        # 0, a failure kind's code (framework/outcomes.py) or 128 + signal
     if not quiet:

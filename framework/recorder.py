@@ -8,9 +8,12 @@ same run gives a bit-identical file (chunked or not: ``savetxt`` formats row by 
 
 Nothing is preallocated for the whole run: rows go into chunks of :data:`CHUNK_ROWS`
 rows, a new one allocated only when the last is full. With a CSV stream open
-(:meth:`Recorder.stream_to`, a run with an output folder) each chunk is appended to
-``signals.csv`` (header first) and flushed as soon as it is full, so a run killed
-midway keeps its rows up to the last full chunk. Chunks stay in memory too: after a
+(:meth:`Recorder.stream_to`, a run with an output folder) rows are appended to
+``signals.csv`` (header first) and flushed when a chunk is full and, in between, at least every
+:data:`FLUSH_SECONDS` of wall time (all rows but the newest, which an open input set from Python may
+still take again: :meth:`Recorder.rerecord`), so a run killed midway keeps its rows up to about a
+second before the kill; each flush formats its rows whole, then writes once (no torn row). Chunks
+stay in memory too: after a
 run, ``log.rows``, ``log['port']``, ``RunResult[...]`` and campaign metrics read the
 whole recording. The memory limit (:func:`.limits.memory_limit_bytes`) is therefore a
 run-time stop, not an up-front refusal: when one more chunk would pass it, ``record()``
@@ -29,6 +32,7 @@ from pathlib import Path
 
 import io
 import math
+import time
 
 import numpy as np
 
@@ -50,6 +54,8 @@ def column_names(ref: PortRef, shape: tuple, names) -> list[str]:
 CHUNK_ROWS = 8192
 #: ... and at most this many bytes per chunk (wide recordings get fewer rows a chunk)
 CHUNK_BYTES = 16e6
+#: s of wall time between flushes of a streamed recording's rows (a killed run loses about this much)
+FLUSH_SECONDS = 1.0
 
 
 class Recorder:
@@ -93,6 +99,8 @@ class Recorder:
         self._fh = None                            # the CSV stream, while open
         self._path: Path | None = None
         self._written = 0                          # full chunks already in the stream
+        self._streamed_i = 0                       # rows of the chunk being filled already in the stream
+        self._next_flush = math.inf                # wall-clock time (monotonic) of the next timed flush
 
     def record(self, t: float) -> str | None:
         """Append the recorded ports' values at ``t``; None, or (a non-finite value) what it was, the row
@@ -106,6 +114,8 @@ class Recorder:
         self._i += 1
         if self._i == self.chunk_rows:
             return self._next_chunk(t)
+        if time.monotonic() >= self._next_flush:
+            self._flush_recent()
         return None
 
     def rerecord(self, t: float) -> None:
@@ -201,37 +211,54 @@ class Recorder:
         self._path = Path(path)
         self._fh = open(self._path, "w", newline="")
         self._fh.write(",".join(self.columns) + "\n")
-        self._written = 0
+        self._written, self._streamed_i = 0, 0
         self._flush()
+        self._flush_recent()
 
-    def _flush(self) -> None:
-        fh = self._fh
-        if fh is None:
+    def _write_rows(self, rows: np.ndarray) -> None:
+        """Append ``rows`` to the stream: formatted whole, then one write and a flush, so a process killed
+        while formatting leaves no torn row (savetxt straight into the file wrote row by row)."""
+        if not len(rows):
             return
+        text = io.StringIO()
+        np.savetxt(text, rows, fmt="%.17g", delimiter=",")
         try:
-            while self._written < len(self.chunks):
-                # formatted whole, then one write and a flush: a process killed while formatting leaves no torn
-                # rows (savetxt straight into the file wrote row by row through the buffer)
-                text = io.StringIO()
-                np.savetxt(text, self.chunks[self._written], fmt="%.17g", delimiter=",")
-                fh.write(text.getvalue())
-                fh.flush()      # in the OS's hands: a killed process keeps it
-                self._written += 1
+            self._fh.write(text.getvalue())
+            self._fh.flush()      # in the OS's hands: a killed process keeps it
         except OSError as e:      # e.g. a full disk mid-run
             raise SnakesimError(f"could not write the run's signals to {self._path}: {e.strerror or e}") from None
 
+    def _flush(self) -> None:
+        """The full chunks not yet in the stream (the rest of a chunk partly streamed by a timed flush)."""
+        if self._fh is None:
+            return
+        while self._written < len(self.chunks):
+            self._write_rows(self.chunks[self._written][self._streamed_i:])
+            self._written += 1
+            self._streamed_i = 0
+
+    def _flush_recent(self) -> None:
+        """The timed flush: the chunk being filled up to, not including, its newest row."""
+        if self._fh is None:
+            return
+        upto = self._i - 1
+        if upto > self._streamed_i:
+            self._write_rows(self._chunk[self._streamed_i:upto])
+            self._streamed_i = upto
+        self._next_flush = time.monotonic() + FLUSH_SECONDS
+
     def close(self) -> None:
-        """Close the stream (its file holds the header and the full chunks only)."""
+        """Close the stream (its file holds the header and the rows flushed so far)."""
         if self._fh is not None:
             self._fh.close()
             self._fh = None
+            self._next_flush = math.inf
 
     def write_csv(self, path: Path) -> None:
         """The whole recording as CSV; to the streamed file, only what it lacks (the last, partial chunk)."""
         if self._fh is not None and self._path is not None and Path(path).resolve() == self._path.resolve():
             self._flush()
-            if self._i:
-                np.savetxt(self._fh, self._chunk[: self._i], fmt="%.17g", delimiter=",")
+            self._write_rows(self._chunk[self._streamed_i: self._i])
             self.close()
             return
         with open(path, "w", newline="") as fh:

@@ -4,17 +4,35 @@
 files already unless ``overwrite``) and ``check_writable_file`` does the same for one file
 (``--save-config``, ``--viz save``). Both write and remove a probe file, so what is checked is what
 the run will do, whatever the permission bits say (root, read-only mounts, full disks).
+
+One writer a folder: ``prepare_out_dir`` claims it first, by creating :data:`LOCK_FILE` atomically
+(``O_CREAT | O_EXCL``: of two runs started together exactly one succeeds) with the claiming process's
+pid, host and start time. A second run refuses the folder naming that process while it lives; a lock
+left by a process that is gone (killed) is taken over. The claim is re-entrant within a process and
+:func:`release_out_dir` removes it when the run's files are written.
+
+While a run is under way its ``summary.json`` says so (:func:`in_progress_summary`: outcome
+``incomplete``, ``completed`` false, who and since when); the finished run replaces it. A folder left by
+a killed run therefore reads as incomplete to every reader (``snakesim replay`` says so), never as a
+finished run with fewer rows.
 """
 
 from __future__ import annotations
 
+import datetime
+import json
 import os
+import socket
 from pathlib import Path
 
 from .errors import SnakesimError
 
 #: what a run writes into its --out folder (write_run)
 RUN_FILES = ("signals.csv", "summary.json", "config.yaml", "last_good_state.npz")
+#: the claim of the folder by the run writing it (removed when it ends)
+LOCK_FILE = ".snakesim-run.lock"
+#: summary.json's outcome while the run is under way, or after it was killed
+INCOMPLETE = "incomplete"
 
 
 def _why(e: OSError) -> str:
@@ -28,23 +46,96 @@ def _probe(folder: Path) -> None:
     probe.unlink()
 
 
+def _holder(lock: Path) -> dict:
+    try:
+        return json.loads(lock.read_text())
+    except (OSError, ValueError):
+        return {}
+
+
+def _alive(holder: dict) -> bool:
+    """The claiming process still runs (on this host; a claim from another host is taken as alive)."""
+    pid = holder.get("pid")
+    if not isinstance(pid, int):
+        return False
+    if holder.get("host") != socket.gethostname():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def _claim(path: Path, option: str) -> None:
+    """Create the folder's lock atomically for this process (already ours: nothing to do); refuse it while
+    another live process holds it; take over a lock whose process is gone."""
+    lock = path / LOCK_FILE
+    me = {"pid": os.getpid(), "host": socket.gethostname(),
+          "started": datetime.datetime.now().astimezone().isoformat(timespec="seconds")}
+    for _ in range(2):
+        try:
+            fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+        except FileExistsError:
+            holder = _holder(lock)
+            if holder.get("pid") == me["pid"] and holder.get("host") == me["host"]:
+                return
+            if _alive(holder) or not holder:     # unreadable: it is being written this very moment
+                who = (f"pid {holder.get('pid')} on {holder.get('host')}, since {holder.get('started')}"
+                       if holder else "a process that is claiming it now")
+                raise SnakesimError(f"{option} {path}: another snakesim run is writing there ({who}); wait for "
+                                    f"it to end or name another folder (its claim: {lock})")
+            lock.unlink(missing_ok=True)         # left by a run that is gone (killed): taken over
+            continue
+        with os.fdopen(fd, "w") as fh:
+            fh.write(json.dumps(me))
+        return
+    raise SnakesimError(f"{option} {path}: could not claim the folder ({lock} keeps reappearing); "
+                        "is another run starting there?")
+
+
+def release_out_dir(path) -> None:
+    """Remove this process's claim of ``path`` (nothing if it holds none)."""
+    lock = Path(path) / LOCK_FILE
+    holder = _holder(lock)
+    if holder.get("pid") == os.getpid() and holder.get("host") == socket.gethostname():
+        lock.unlink(missing_ok=True)
+
+
+def in_progress_summary(source: str) -> dict:
+    """summary.json's content while a run is under way (the finished run replaces it)."""
+    return {"outcome": INCOMPLETE, "completed": False, "source": source,
+            "stop_reason": "the run had not finished when this was written: it is still running, or it was "
+                           "killed (signals.csv holds the rows flushed before that)",
+            "pid": os.getpid(), "host": socket.gethostname(),
+            "started": datetime.datetime.now().astimezone().isoformat(timespec="seconds")}
+
+
 def prepare_out_dir(path, overwrite: bool = False, option: str = "--out") -> Path:
-    """The run folder, made and known writable; a folder that already holds files is refused unless
-    ``overwrite`` (then the run's own files are replaced when it ends, a stale last_good_state.npz
-    removed)."""
+    """The run folder, made, known writable and claimed by this process (:data:`LOCK_FILE`); a folder that
+    already holds files is refused unless ``overwrite`` (then the run's own files are replaced when it
+    ends, a stale last_good_state.npz removed), and so is one another live run has claimed."""
     path = Path(path)
     if path.exists() and not path.is_dir():
         raise SnakesimError(f"{option} {path}: exists and is not a folder; name a new or empty folder")
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+        _claim(path, option)
+    except OSError as e:
+        raise SnakesimError(f"{option} {path}: cannot write there ({_why(e)}); name a folder you can write to") from None
     if path.is_dir():
-        entries = sorted(p.name for p in path.iterdir())
+        entries = sorted(p.name for p in path.iterdir() if p.name != LOCK_FILE)
         if entries and not overwrite:
+            release_out_dir(path)
             shown = ", ".join(entries[:5]) + (f" and {len(entries) - 5} more" if len(entries) > 5 else "")
             raise SnakesimError(f"{option} {path}: the folder is not empty ({shown}); name a new or empty folder, "
                                 f"or pass --overwrite to replace the run files in it ({', '.join(RUN_FILES)})")
     try:
-        path.mkdir(parents=True, exist_ok=True)
         _probe(path)
     except OSError as e:
+        release_out_dir(path)
         raise SnakesimError(f"{option} {path}: cannot write there ({_why(e)}); name a folder you can write to") from None
     return path
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import datetime
+import json
 from pathlib import Path
 
 from .assembly import Resolved, resolve
@@ -11,7 +12,7 @@ from .builder import Builder
 from .plan import Plan
 from .registry import Registry, default_registry
 from .run_reports import add_reports
-from .run_files import prepare_out_dir
+from .run_files import in_progress_summary, prepare_out_dir, release_out_dir
 from .simulator import RunResult, Simulator, write_run
 from .warm_up import warm_up
 from .yaml_source import dump_yaml
@@ -71,20 +72,27 @@ class Session:
         :meth:`interrupt` the run ends at the next step boundary and its summary says so."""
         sim = self.resolved.sim
         if out_dir is not None:
-            prepare_out_dir(out_dir, overwrite=True)
+            prepare_out_dir(out_dir, overwrite=True)        # claimed: one writer a folder (run_files.py)
             try:      # before the first step: a killed run keeps its config beside the signals streamed so far,
                 (Path(out_dir) / "config.yaml").write_text(self.config_text())
-                for stale in ("summary.json", "last_good_state.npz"):     # and no earlier run's summary
-                    (Path(out_dir) / stale).unlink(missing_ok=True)
+                (Path(out_dir) / "last_good_state.npz").unlink(missing_ok=True)
+                # and a summary that says the run is not finished (the finished run replaces it)
+                (Path(out_dir) / "summary.json").write_text(
+                    json.dumps(in_progress_summary(self.resolved.source), indent=2) + "\n")
             except OSError as e:
+                release_out_dir(out_dir)
                 raise SnakesimError(f"could not write the run to {out_dir}: {e}") from None
-        result = self.simulator.run(sim.duration, t0=sim.t0, progress=progress,
-                                    realtime=sim.realtime if realtime is None else realtime, out_dir=out_dir)
-        if self.interrupted is not None:
-            result.summary["interrupted"] = {**self.interrupted, "at_sim_time_s": result.summary["t_end_s"]}
-        add_reports(self.plan, result.summary)          # components' report(cache, summary): framework/run_reports.py
-        if out_dir is not None:
-            write_run(Path(out_dir), result, self.config_text())
+        try:
+            result = self.simulator.run(sim.duration, t0=sim.t0, progress=progress,
+                                        realtime=sim.realtime if realtime is None else realtime, out_dir=out_dir)
+            if self.interrupted is not None:
+                result.summary["interrupted"] = {**self.interrupted, "at_sim_time_s": result.summary["t_end_s"]}
+            add_reports(self.plan, result.summary)          # components' report(cache, summary): framework/run_reports.py
+            if out_dir is not None:
+                write_run(Path(out_dir), result, self.config_text())
+        finally:
+            if out_dir is not None:
+                release_out_dir(out_dir)
         return result
 
     def interrupt(self, signal_name: str) -> None:

@@ -30,6 +30,7 @@ import yaml
 
 from snakesim.framework import SnakesimError
 from snakesim.framework.harness import Harness
+from snakesim.framework.run_files import INCOMPLETE
 from snakesim.framework.signals import Structured
 
 from . import entities as E
@@ -111,6 +112,10 @@ def replay(run_dir, target: VizTarget | None = None, body_frames: bool = False, 
     target = target or VizTarget("save", str(run_dir / "replay.rrd"))
     t = data[:, 0]
     notes: list[str] = []
+    if summary.get("outcome") == INCOMPLETE:        # written while the run was under way: killed, or running
+        notes.append(f"{run_dir} is incomplete: the run had not finished (started {summary.get('started')}, pid "
+                     f"{summary.get('pid')}); replaying the {len(t)} rows it flushed, to t = "
+                     f"{t[-1] if len(t) else 0.0:g} s")
 
     classes = {}
     for name, spec in cfg["components"].items():
