@@ -2,8 +2,10 @@
 
 Randomness is never global (np.random.seed) and never lives on the
 component object: sample k's noise is drawn from a Philox generator keyed by
-the ``seed`` parameter with counter k, where k is the sample counter kept in
-the component's discrete state. The same assembly and seed therefore give
+the ``seed`` parameter with counter k in the counter's second word, where k is
+the sample counter kept in the component's discrete state. Not the first word:
+Philox advances that word once per four 64-bit draws, so with k there a sample of
+more than four values would reuse the next sample's first values. The same assembly and seed therefore give
 bit-identical readings in every run of a session, whatever else runs, and
 two sensors with different seeds have independent noise.
 """
@@ -15,7 +17,7 @@ import numpy as np
 
 def white_noise(seed: int, tick: float, std: np.ndarray) -> np.ndarray:
     """Zero-mean Gaussian noise with standard deviations ``std`` (any shape) for sample ``tick``."""
-    gen = np.random.Generator(np.random.Philox(key=int(seed), counter=[int(tick), 0, 0, 0]))
+    gen = np.random.Generator(np.random.Philox(key=int(seed), counter=[0, int(tick), 0, 0]))
     return gen.standard_normal(std.shape) * std
 
 
