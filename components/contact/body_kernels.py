@@ -30,15 +30,21 @@ from .point_kernels import link_fixed_points, sample_points, world_axis
 
 
 @njit(cache=True)
-def body_contact_wrenches(m, distance, normal, material, sample, owner, poses, vels, piece_link, axis_B, mu_scale,
-                          skin_ratio, mats, law, R, out_point, out_vel, out_force, out_fn, out_wrench, out_link_fn):
-    """Forces on the first m samples (world points in out_point already) and their wrenches about each
-    link's origin. A sample with φ < 0 is a contact of depth d = −φ, terrain normal n̂; its velocity
-    v = v_l + ω_l × (p − o_l); F_n = max(0, k d − c v·n̂) (eq. 2); friction by eq. 6 with ê_v the skin
+def body_contact_wrenches(table, work, ports, mats, m):
+    """Forces on the first m samples (work's rows: world points in work.points, distance, normal, material
+    queried) and their wrenches about each link's origin, on the records below (BodyTable, BodyWork,
+    BodyPorts; ``mats`` the terrain's material table). A sample with φ < 0 is a contact of depth d = −φ,
+    terrain normal n̂; its velocity v = v_l + ω_l × (p − o_l); F_n = max(0, k d − c v·n̂) (eq. 2); friction by eq. 6 with ê_v the skin
     axis (R_l axis_B), μ = μ_material · mu_scale, ‖e_v‖ = skin_ratio, each scaled by the contact law
     record ``law`` (contact_law.skin_law; its rows are links; begin_law checks it and adds its sinkage to
-    the distances here, first; its slip outputs are written here). Wrench [f, (p − o_l) × f] into out_wrench[l] (zeroed first).
-    Returns the number of samples in contact."""
+    the distances here, first; its slip outputs are written here). Wrench [f, (p − o_l) × f] into ports.wrenches[l]
+    (zeroed first); work.vel, work.force, work.fn per sample, ports.link_fn per link. Returns the number of samples
+    in contact."""
+    # the records' arrays into locals, once (contact_law.py: a field read in the loop costs a reference count)
+    distance, normal, material, sample, owner = work.distance, work.normal, work.material, work.sample, work.owner
+    R, out_point, out_vel, out_force, out_fn = work.R, work.points, work.vel, work.force, work.fn
+    poses, vels, law, out_wrench, out_link_fn = ports.poses, ports.vels, ports.law, ports.wrenches, ports.link_fn
+    piece_link, axis_B, mu_scale, skin_ratio = table.piece_link, table.axis_B, table.mu_scale, table.skin_ratio
     out_wrench[:, :] = 0.0
     out_link_fn[:] = 0.0
     begin_law(law, m, distance, owner)
@@ -93,12 +99,6 @@ BodyPorts = record("BodyPorts", ("poses", "vels", "wrenches", "link_fn", "normal
 
 
 @njit(cache=True)
-def _wrenches(t, w, io, mats, m):
-    return body_contact_wrenches(m, w.distance, w.normal, w.material, w.sample, w.owner, io.poses, io.vels,
-                                 t.piece_link, t.axis_B, t.mu_scale, t.skin_ratio, mats, io.law, w.R, w.points, w.vel, w.force, w.fn, io.wrenches, io.link_fn)
-
-
-@njit(cache=True)
 def body_plane_step(table, work, ports, surface):
     """One whole evaluation against a plane: broad phase, sample points, plane query, forces, outputs."""
     t, w, io, f = table, work, ports, surface
@@ -111,7 +111,7 @@ def body_plane_step(table, work, ports, surface):
         plane_query(m, w.points, f.origin, f.n, w.distance, w.normal, w.material)
         for i in range(m):
             w.material[i] = f.region_material
-    count_evaluation(w, io, n_active, m, _wrenches(t, w, io, f.mats, m), io.link_fn)
+    count_evaluation(w, io, n_active, m, body_contact_wrenches(t, w, io, f.mats, m), io.link_fn)
 
 
 @njit(cache=True)
@@ -136,17 +136,15 @@ def body_sample_step(table, work, ports):
 def body_wrench_step(table, work, ports, surface):
     """Forces and wrenches of the m samples queried (distance, normal, material filled in), outputs."""
     m = work.counts[4]
-    count_evaluation(work, ports, work.counts[3], m, _wrenches(table, work, ports, surface.mats, m), ports.link_fn)
+    count_evaluation(work, ports, work.counts[3], m, body_contact_wrenches(table, work, ports, surface.mats, m),
+                     ports.link_fn)
 
 
 @njit(cache=True)
 def body_jacobian_step(table, work, ports, surface, d_twist, d_pose, on_link):
     """jacobian_kernels.body_jacobian_blocks on the last evaluation's contacts (work), from the records.
     Returns the number of links marked."""
-    t, w = table, work
-    return body_jacobian_blocks(w.counts[4], w.distance, w.normal, w.material, w.sample, w.owner, w.points, w.vel,
-                                ports.poses, t.piece_link, t.axis_B, t.mu_scale, t.skin_ratio, surface.mats, ports.law,
-                                d_twist, d_pose, on_link)
+    return body_jacobian_blocks(table, work, ports, surface.mats, work.counts[4], d_twist, d_pose, on_link)
 
 
 @njit(cache=True)

@@ -166,17 +166,22 @@ def _clear_marked(d_twist, d_pose, on_link):
 
 
 @njit(cache=True)
-def contact_jacobian_blocks(m, distance, normal, material, owner, point, vel, poses, axis_B, screw_row,
-                            parent_row, lead_angle, hand, mats, law, near, lookahead_time, d_twist, d_pose, on_link):
+def contact_jacobian_blocks(samples, work, ports, mats, m, d_twist, d_pose, on_link):
     """Per screw link, Σ over its samples in contact of X_cᵀ ∂F/∂v X_c and X_cᵀ ∂F/∂p_s X_c (about the
-    screw link's origin, world axes), from the last evaluation's per-sample results (point = p_c,
-    vel = v), with the law the forces took (the contact law record ``law``, contact_law.py: its μ and ‖e_v‖
-    scales; the distances already carry its sinkage). A sample not yet touching (gap under ``near``) whose gap closes within ``lookahead_time`` at its approach speed
+    screw link's origin, world axes), from the last evaluation's per-sample results in its first m rows
+    (screw_contact_kernels records: work.point = p_c, work.vel = v; ``mats`` the terrain's material table),
+    with the law the forces took (the contact law record ports.law, contact_law.py: its μ and ‖e_v‖ scales; the distances already carry its sinkage). A sample not yet touching (gap under ``near``) whose gap closes within ``lookahead_time`` at its approach speed
     (its p_c and v are there: contact_wrenches' ``near`` rows) adds its normal spring-damper slopes too:
     a step that starts with the contact open then meets it implicitly, as a joint stop's look-ahead
     does (joint_stops.py), instead of integrating k and c explicitly over the step that makes contact.
     Blocks of links marked in on_link are overwritten, others untouched; returns the number of links
     marked."""
+    # the records' arrays into locals, once (contact_law.py: a field read in the loop costs a reference count)
+    distance, normal, material, owner, point, vel = work.distance, work.normal, work.material, work.owner, \
+        work.point, work.vel
+    poses, law, axis_B, screw_row, parent_row = ports.poses, ports.law, samples.axis_B, samples.screw_row, \
+        samples.parent_row
+    lead_angle, hand, near, lookahead_time = samples.lead_angle, samples.hand, samples.near, samples.lookahead_time
     _clear_marked(d_twist, d_pose, on_link)
     Dv = np.empty((3, 3))
     Dp = np.empty((3, 3))
@@ -234,15 +239,18 @@ def contact_jacobian_blocks(m, distance, normal, material, owner, point, vel, po
 
 
 @njit(cache=True)
-def body_jacobian_blocks(m, distance, normal, material, sample, owner, point, vel, poses, piece_link, axis_B,
-                         mu_scale, skin_ratio, mats, law, d_twist, d_pose, on_link):
-    """Body contact (body_kernels.body_contact_wrenches): per link, Σ over its samples in contact of
+def body_jacobian_blocks(table, work, ports, mats, m, d_twist, d_pose, on_link):
+    """Body contact (body_kernels.body_contact_wrenches; its records BodyTable, BodyWork, BodyPorts, the first m
+    rows of work: points, vel): per link, Σ over its samples in contact of
     X_pᵀ ∂F/∂v X_p and X_pᵀ ∂F/∂p X_p about the link's origin (world axes), X_p = [I, −[p − o_l]×].
     The body law is point_jacobian's with ê the skin axis R_l axis_B (projected on the tangent plane
     inside), μ and κ from contact_law.skin_law as the forces took them (μ_material · mu_scale · the law's μ
     scale, κ = skin_ratio · its ‖e_v‖ scale; ev_b = 0: no load dependence). The sample is
     fixed in the link, so its depth moves with it (δp = X_p δ_l). Blocks of links marked in on_link are
     overwritten, others untouched; returns the number of links marked."""
+    distance, normal, material, sample, owner = work.distance, work.normal, work.material, work.sample, work.owner
+    point, vel, poses, law = work.points, work.vel, ports.poses, ports.law
+    piece_link, axis_B, mu_scale, skin_ratio = table.piece_link, table.axis_B, table.mu_scale, table.skin_ratio
     _clear_marked(d_twist, d_pose, on_link)
     Dv = np.empty((3, 3))
     Dp = np.empty((3, 3))

@@ -50,37 +50,41 @@ def plane_broad_phase(broad_phase, poses, owner_link, centre_B, radii, origin, n
 
 
 @njit(cache=True)
-def plane_contact_step(broad_phase, origin, n, region_material, sphere_r, start, points_B, mount_p, active, centres,
-                       points, distance, normal, material, sample, owner, poses, vels, joint_v, ringc_B, radial_B, axis_B,
-                       parent_row, screw_row, radius, lead_angle, hand, spin_dof, spin_mult, mats, law, R, out_point,
-                       out_vel, out_force, out_fn, out_wrench, out_screw_fn):
-    """One contact evaluation against a plane in one call (the screw_sdf hot path, one dispatch):
-    broad phase (link_fixed_points + plane_active, or every screw), sample_points, plane_query and
-    contact_wrenches, exactly as the component calls them one by one for other terrains.
-    Returns (screws tested, samples queried m, samples in contact)."""
-    n_active = plane_broad_phase(broad_phase, poses, parent_row, mount_p, sphere_r, origin, n, R, centres, active)
+def plane_contact_step(samples, work, ports, surface):
+    """One contact evaluation against a plane in one call (the screw_sdf hot path, one dispatch), on the
+    records (screw_contact_kernels: Samples, SdfWork, SdfPorts, Surface): broad phase (link_fixed_points +
+    plane_active, or every screw), sample_points, plane_query and contact_wrenches, exactly as the component
+    calls them one by one for other terrains. Returns (screws tested, samples queried m, samples in contact)."""
+    origin, n, region_material, mats = surface.origin, surface.n, surface.region_material, surface.mats
+    active, centres, points, R = work.active, work.centres, work.points, work.R
+    distance, normal, material, sample, owner = work.distance, work.normal, work.material, work.sample, work.owner
+    poses, start, points_B, parent_row = ports.poses, samples.start, samples.points_B, samples.parent_row
+    n_active = plane_broad_phase(samples.broad_phase, poses, parent_row, samples.mount_p, samples.sphere_r, origin, n,
+                                 R, centres, active)
     m = 0
     if n_active:
         m = sample_points(poses, active, n_active, start, points_B, parent_row, R, points, sample, owner)
         plane_query(m, points, origin, n, distance, normal, material)
         for i in range(m):
             material[i] = region_material
-    n_contact = contact_wrenches(m, distance, normal, material, sample, owner, poses, vels, joint_v, ringc_B,
-                                 radial_B, axis_B, parent_row, screw_row, radius, lead_angle, hand, spin_dof,
-                                 spin_mult, mats, law, 0.0, R, out_point, out_vel, out_force, out_fn, out_wrench,
-                                 out_screw_fn)
+    n_contact = contact_wrenches(samples, work, ports, mats, 0.0, m)
     return n_active, m, n_contact
 
 
 @njit(cache=True)
-def plane_rings(poses, active, n_active, start, points_B, ring_start, ring_first, ringc_B, axis_B, parent_row, radius,
-                origin, n, near, R, out_points, out_distance, out_normal, out_sample, out_owner):
-    """Exact rings against a plane, without querying the samples: a plane's normal is the same
+def plane_rings(samples, work, ports, surface, n_active):
+    """Exact rings of the first n_active screws of work.active against the plane ``surface``, into work's
+    rows (points, distance, normal, sample, owner), without querying the samples: a plane's normal is the same
     everywhere, so every sample of a ring meets the surface its extremal point does (finish_extremal
     would drop them all) unless n̂ ∥ â, where the ring's samples act. Rows: the extremal point of each
     ring that reaches the plane (φ(c) < r: depth r |n̂ − (n̂·â)â| − φ(c)), or the samples of a ring
     whose axis is along n̂; a ring whose extremal point is within ``near`` above the plane is a row too
     (not touching: the Jacobian's look-ahead). Returns the number of rows."""
+    poses, active, R, origin, n, near = ports.poses, work.active, work.R, surface.origin, surface.n, samples.near
+    start, points_B, ring_start, ring_first = samples.start, samples.points_B, samples.ring_start, samples.ring_first
+    ringc_B, axis_B, parent_row, radius = samples.ringc_B, samples.axis_B, samples.parent_row, samples.radius
+    out_points, out_distance, out_normal = work.points, work.distance, work.normal
+    out_sample, out_owner = work.sample, work.owner
     k = 0
     for a in range(n_active):
         s = active[a]
@@ -128,26 +132,16 @@ def plane_extremal_step(samples, work, ports, surface):
                                  w.centres, w.active)
     m = 0
     if n_active:
-        m = plane_rings(io.poses, w.active, n_active, s.start, s.points_B, s.ring_start, s.ring_first, s.ringc_B,
-                        s.axis_B, s.parent_row, s.radius, f.origin, f.n, s.near, w.R, w.points, w.distance, w.normal,
-                        w.sample, w.owner)
+        m = plane_rings(s, w, io, f, n_active)
+        material = w.material
         for i in range(m):
-            w.material[i] = f.region_material
-    n_contact = contact_wrenches(m, w.distance, w.normal, w.material, w.sample, w.owner, io.poses, io.vels,
-                                 io.joint_v, s.ringc_B, s.radial_B, s.axis_B, s.parent_row, s.screw_row, s.radius,
-                                 s.lead_angle, s.hand, s.spin_dof, s.spin_mult, f.mats, io.law, s.near, w.R, w.point,
-                                 w.vel, w.force, w.fn, io.wrenches, io.screw_fn)
+            material[i] = f.region_material
+    n_contact = contact_wrenches(s, w, io, f.mats, s.near, m)
     finish_evaluation(w, io, n_active, m, n_contact)
 
 
 @njit(cache=True)
 def plane_step(samples, work, ports, surface):
     """One evaluation against a plane (plane_contact_step), outputs and counters included."""
-    s, w, io, f = samples, work, ports, surface
-    n_active, m, n_contact = plane_contact_step(
-        s.broad_phase, f.origin, f.n, f.region_material, s.sphere_r, s.start, s.points_B, s.mount_p, w.active,
-        w.centres, w.points, w.distance, w.normal, w.material, w.sample, w.owner, io.poses, io.vels, io.joint_v,
-        s.ringc_B, s.radial_B, s.axis_B, s.parent_row, s.screw_row, s.radius, s.lead_angle, s.hand, s.spin_dof,
-        s.spin_mult, f.mats, io.law, w.R, w.point, w.vel, w.force, w.fn, io.wrenches,
-        io.screw_fn)
-    finish_evaluation(w, io, n_active, m, n_contact)
+    n_active, m, n_contact = plane_contact_step(samples, work, ports, surface)
+    finish_evaluation(work, ports, n_active, m, n_contact)

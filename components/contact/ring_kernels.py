@@ -90,10 +90,16 @@ def ring_extremal(m, nr, points, distance, normal, owner, poses, axis_B, parent_
 
 
 @njit(cache=True)
-def finish_extremal(m, ne, ext_row, ext_distance, ext_normal, ext_material, distance, normal, material, owner,
-                    ring_row, ring_dir, poses, axis_B, parent_row, cos_sep, R):
-    """The extremal points' queries into their ring rows; samples in contact with the surface their ring
-    already meets (ê_i within ``sep`` of ê_c) are taken out of contact (+inf)."""
+def finish_extremal(samples, work, ports):
+    """The extremal points' queries (work.ext_distance, ext_normal, ext_material: work.counts[6] of them) into
+    their ring rows; samples (the first work.counts[5] rows) in contact with the surface their ring already
+    meets (ê_i within ``sep`` of ê_c) are taken out of contact (+inf). Records: screw_contact_kernels.Samples,
+    SdfWork, SdfPorts."""
+    m, ne, ext_row, R = work.counts[5], work.counts[6], work.ext_row, work.R
+    ext_distance, ext_normal, ext_material = work.ext_distance, work.ext_normal, work.ext_material
+    distance, normal, material, owner = work.distance, work.normal, work.material, work.owner
+    ring_row, ring_dir, poses = work.ring_row, work.ring_dir, ports.poses
+    axis_B, parent_row, cos_sep = samples.axis_B, samples.parent_row, samples.cos_sep
     for e in range(ne):
         k = ext_row[e]
         distance[k] = ext_distance[e]

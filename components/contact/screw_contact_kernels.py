@@ -26,10 +26,10 @@ from .point_kernels import world_axis
 
 
 @njit(cache=True)
-def contact_wrenches(m, distance, normal, material, sample, owner, poses, vels, joint_v, ringc_B, radial_B, axis_B,
-                     parent_row, screw_row, radius, lead_angle, hand, spin_dof, spin_mult, mats, law, near, R,
-                     out_point, out_vel, out_force, out_fn, out_wrench, out_screw_fn):
-    """Forces on the first m samples and their wrenches about each screw link's origin o_S.
+def contact_wrenches(samples, work, ports, mats, near, m):
+    """Forces on the first m samples (work's rows: distance, normal, material, sample, owner queried) and their
+    wrenches about each screw link's origin o_S; ``samples``, ``work``, ``ports`` are the records below
+    (Samples, SdfWork, SdfPorts), ``mats`` the terrain's material table.
 
     A sample in contact (φ < 0) gives the depth d = −φ and the terrain normal n̂. The
     screw's envelope is a surface of revolution, so the force acts where the envelope
@@ -45,11 +45,19 @@ def contact_wrenches(m, distance, normal, material, sample, owner, poses, vels, 
     normal velocity or spin torque from a sample that lies off the envelope's lowest line.
     k, c, μ, ‖e_v‖ come from the material row through the contact law record ``law`` (contact_law.py: its
     per-screw μ and ‖e_v‖ scales; begin_law checks its inputs and adds its sinkage to the first m distances
-    here, first; its slip outputs are written here). Wrench [f, (p_c − o_S) × f] into out_wrench[screw_row[s]] (zeroed first). Writes
-    out_point (p_c), out_vel, out_force, out_fn for samples in contact, and p_c and v (no force) for samples
-    within ``near`` of the surface (the implicit step's look-ahead: jacobian_kernels.contact_jacobian_blocks);
-    zeros elsewhere. Returns the number of samples in contact.
+    here, first; its slip outputs are written here). Wrench [f, (p_c − o_S) × f] into ports.wrenches[screw_row[s]]
+    (zeroed first). Writes work.point (p_c), work.vel, work.force, work.fn for samples in contact, and p_c and v (no
+    force) for samples within ``near`` of the surface (the implicit step's look-ahead:
+    jacobian_kernels.contact_jacobian_blocks); zeros elsewhere. Returns the number of samples in contact.
     """
+    # the records' arrays into locals, once (contact_law.py: a field read in the loop costs a reference count)
+    distance, normal, material, sample, owner = work.distance, work.normal, work.material, work.sample, work.owner
+    R, out_point, out_vel, out_force, out_fn = work.R, work.point, work.vel, work.force, work.fn
+    poses, vels, joint_v, law = ports.poses, ports.vels, ports.joint_v, ports.law
+    out_wrench, out_screw_fn = ports.wrenches, ports.screw_fn
+    ringc_B, radial_B, axis_B, parent_row = samples.ringc_B, samples.radial_B, samples.axis_B, samples.parent_row
+    screw_row, radius, lead_angle, hand = samples.screw_row, samples.radius, samples.lead_angle, samples.hand
+    spin_dof, spin_mult = samples.spin_dof, samples.spin_mult
     out_wrench[:, :] = 0.0
     out_screw_fn[:] = 0.0
     begin_law(law, m, distance, owner)

@@ -73,23 +73,16 @@ def ring_extremal_step(samples, work, ports):
 def ring_finish_step(samples, work, ports):
     """After the extremal points' query (work.ext_distance, ext_normal, ext_material; counts[6] of them):
     the rings' rows."""
-    w = work
-    finish_extremal(w.counts[5], w.counts[6], w.ext_row, w.ext_distance, w.ext_normal, w.ext_material, w.distance, w.normal,
-                    w.material, w.owner, w.ring_row, w.ring_dir, ports.poses, samples.axis_B, samples.parent_row,
-                    samples.cos_sep, w.R)
+    finish_extremal(samples, work, ports)
 
 
 @njit(cache=True)
 def wrench_step(samples, work, ports, surface):
     """Forces and wrenches of the m samples queried (distance, normal, material filled in), outputs
     and counters."""
-    s, w, io = samples, work, ports
-    m = w.counts[4]
-    n_contact = contact_wrenches(m, w.distance, w.normal, w.material, w.sample, w.owner, io.poses, io.vels,
-                                 io.joint_v, s.ringc_B, s.radial_B, s.axis_B, s.parent_row, s.screw_row, s.radius,
-                                 s.lead_angle, s.hand, s.spin_dof, s.spin_mult, surface.mats, io.law, s.near,
-                                 w.R, w.point, w.vel, w.force, w.fn, io.wrenches, io.screw_fn)
-    finish_evaluation(w, io, w.counts[3], m, n_contact)
+    m = work.counts[4]
+    n_contact = contact_wrenches(samples, work, ports, surface.mats, samples.near, m)
+    finish_evaluation(work, ports, work.counts[3], m, n_contact)
 
 
 @njit(cache=True)
@@ -103,7 +96,4 @@ def seen_step(work, ports):
 def jacobian_step(samples, work, ports, surface, d_twist, d_pose, on_link):
     """jacobian_kernels.contact_jacobian_blocks on the last evaluation's contacts (work), from the records
     (one bound call instead of twenty arguments typed per call). Returns the number of links marked."""
-    s, w = samples, work
-    return contact_jacobian_blocks(w.counts[4], w.distance, w.normal, w.material, w.owner, w.point, w.vel, ports.poses,
-                                   s.axis_B, s.screw_row, s.parent_row, s.lead_angle, s.hand, surface.mats, ports.law,
-                                   s.near, s.lookahead_time, d_twist, d_pose, on_link)
+    return contact_jacobian_blocks(samples, work, ports, surface.mats, work.counts[4], d_twist, d_pose, on_link)

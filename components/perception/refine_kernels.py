@@ -23,6 +23,11 @@ hit when the point at that range along the ray is inside the terrain (the true s
 crossed before it), which takes r_s alone, its modes added largest first until the rest
 (Σ|A_j| of the modes left) cannot change the side (``_beyond_wall``).
 
+The kernels take the terrain as one argument record (``FourierWall``, components/kernel_args.py, built
+once per refiner) and read its arrays into locals once per call; the per-point functions (``_distance``,
+``_beyond_wall``: one point, called in the loops) keep those locals as plain arguments, as the contact
+law's point functions do (a record field read per point would cost a reference count each).
+
 tests/perception/test_refine_kernels.py checks the distance and normal against the terrain's
 query, the inside test against its sign, and the refined hits against the NumPy iteration.
 """
@@ -34,12 +39,18 @@ import math
 import numpy as np
 from numba import njit
 
+from ..kernel_args import record
+
 #: largest angular order written as powers (the spec's m_max is small; larger falls back to NumPy)
 MAX_ORDER = 64
 #: largest |k (s − s_g)| turned by the Taylor series (sets the table's spacing)
 TAYLOR_REACH = 0.05
 #: table nodes at most (a longer span keeps the calls beyond it)
 MAX_NODES = 200_000
+
+#: one Fourier-cylinder terrain, as the kernels read it (FourierRefiner's arrays; ``order`` = max m)
+FourierWall = record("FourierWall", ("origin", "R", "radius", "slope", "A", "m", "k", "phase", "Am", "Ak", "by_size",
+                                     "tail", "order", "table", "s0", "h", "surface", "top", "region_material"))
 
 
 class FourierRefiner:
@@ -67,6 +78,10 @@ class FourierRefiner:
         # modes largest first, and what the rest can add (_beyond_wall stops once it cannot matter)
         self.by_size = np.argsort(-np.abs(self.A), kind="stable").astype(np.int64)
         self.tail = np.r_[np.cumsum(np.abs(self.A)[self.by_size][::-1])[::-1], 0.0]
+        self.wall = FourierWall(origin=self.origin, R=self.R, radius=self.radius, slope=self.slope, A=self.A, m=self.m,
+                                k=self.k, phase=self.phase, Am=self.Am, Ak=self.Ak, by_size=self.by_size,
+                                tail=self.tail, order=int(self.m.max(initial=0)), table=self.table, s0=self.s0,
+                                h=self.h, surface=self.surface, top=self.top, region_material=self.region_material)
 
     @staticmethod
     def for_terrain(terrain, vertices=None, margin: float = 1.0) -> "FourierRefiner | None":
@@ -93,29 +108,22 @@ class FourierRefiner:
                distance, normal, albedo, color, material, near: float = 0.0):
         """Newton from the mesh hits (``distance``) of rays ``rays`` of (o, d (n, 3)); in place where it
         converges; mesh hits nearer than ``near`` that the ray has passed by then are kept (``newton``)."""
-        newton(o, d, rays, iterations, tolerance, grazing, limit, float(near), self.origin, self.R, self.radius,
-               self.slope, self.A, self.m, self.k, self.phase, self.Am, self.Ak, self.by_size, self.tail,
-               int(self.m.max(initial=0)), self.table, self.s0, self.h, self.surface, self.top, self.region_material,
-               albedo_m, color_m, distance, normal, albedo, color, material)
+        newton(self.wall, o, d, rays, iterations, tolerance, grazing, limit, float(near), albedo_m, color_m, distance,
+               normal, albedo, color, material)
 
     def beyond_wall(self, points) -> np.ndarray:
         """(n,) whether world points are inside the terrain (its distance < 0), as ``newton`` tells
         a hit that only blocks (``_beyond_wall``)."""
         p = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
         out = np.empty(len(p), dtype=np.bool_)
-        beyond_points(p, self.origin, self.R, self.radius, self.slope, self.A, self.m, self.k, self.phase,
-                      self.by_size, self.tail, int(self.m.max(initial=0)), self.table, self.s0, self.h, self.surface,
-                      self.top, out)
+        beyond_points(self.wall, p, out)
         return out
 
     def query(self, points):
         """(distance (n,), normal (n, 3), material (n,)) at world points: the terrain's query."""
         n = len(points)
         dist, nrm, mat = np.empty(n), np.empty((n, 3)), np.empty(n, dtype=np.int64)
-        query_points(np.ascontiguousarray(points, dtype=np.float64), self.origin, self.R, self.radius, self.slope,
-                     self.A, self.m, self.k, self.phase, self.Am, self.Ak, int(self.m.max(initial=0)), self.table,
-                     self.s0, self.h,
-                     self.surface, self.top, self.region_material, dist, nrm, mat)
+        query_points(self.wall, np.ascontiguousarray(points, dtype=np.float64), dist, nrm, mat)
         return dist, nrm, mat
 
 
@@ -231,8 +239,12 @@ def _beyond_wall(x, y, z, origin, R, radius, slope, A, m, k, phase, by_size, tai
 
 
 @njit(cache=True, nogil=True)
-def beyond_points(p, origin, R, radius, slope, A, m, k, phase, by_size, tail, order, table, s0, h, surface, top,
-                  out):
+def beyond_points(wall, p, out):
+    """out[i]: whether point p[i] is inside the terrain ``wall`` (FourierWall), by _beyond_wall."""
+    origin, R, radius, slope, A, m, k, phase = wall.origin, wall.R, wall.radius, wall.slope, wall.A, wall.m, wall.k, \
+        wall.phase
+    by_size, tail, order, table, s0, h, surface, top = wall.by_size, wall.tail, wall.order, wall.table, wall.s0, \
+        wall.h, wall.surface, wall.top
     powers = np.empty((4, max(order + 1, A.shape[0])))
     for i in range(p.shape[0]):
         out[i] = _beyond_wall(p[i, 0], p[i, 1], p[i, 2], origin, R, radius, slope, A, m, k, phase, by_size, tail,
@@ -240,8 +252,13 @@ def beyond_points(p, origin, R, radius, slope, A, m, k, phase, by_size, tail, or
 
 
 @njit(cache=True, nogil=True)
-def query_points(p, origin, R, radius, slope, A, m, k, phase, Am, Ak, order, table, s0, h, surface, top,
-                 region_material, dist, normal, material):
+def query_points(wall, p, dist, normal, material):
+    """The terrain ``wall``'s (FourierWall) distance, normal and material at points p, by _distance."""
+    origin, R, radius, slope, A, m, k, phase = wall.origin, wall.R, wall.radius, wall.slope, wall.A, wall.m, wall.k, \
+        wall.phase
+    Am, Ak, order, table, s0, h, surface, top = wall.Am, wall.Ak, wall.order, wall.table, wall.s0, wall.h, \
+        wall.surface, wall.top
+    region_material = wall.region_material
     powers = np.empty((4, max(order + 1, A.shape[0])))
     for i in range(p.shape[0]):
         dist[i], region = _distance(p[i, 0], p[i, 1], p[i, 2], origin, R, radius, slope, A, m, k, phase, Am, Ak,
@@ -250,10 +267,9 @@ def query_points(p, origin, R, radius, slope, A, m, k, phase, Am, Ak, order, tab
 
 
 @njit(cache=True, nogil=True)
-def newton(o, d, rays, iterations, tolerance, grazing, limit, near, origin, R, radius, slope, A, m, k, phase, Am, Ak,
-           by_size, tail, order, table, s0, h, surface, top, region_material, albedo_m, color_m, distance, normal,
-           albedo, color, material):
-    """The NumPy iteration of .ray_caster.StaticTerrainScene._refine, written out, for the rays
+def newton(wall, o, d, rays, iterations, tolerance, grazing, limit, near, albedo_m, color_m, distance, normal, albedo,
+           color, material):
+    """On the terrain ``wall`` (FourierWall), the NumPy iteration of .ray_caster.StaticTerrainScene._refine, written out, for the rays
     ``rays`` of (o, d) from their mesh hits ``distance`` (at most ``iterations`` steps, done once
     the error left is below ``tolerance`` m: .ray_caster.REFINE_TOLERANCE): where it converges, the
     refined distance,
@@ -261,6 +277,10 @@ def newton(o, d, rays, iterations, tolerance, grazing, limit, near, origin, R, r
     replace the mesh hit's in place. A mesh hit nearer than ``near`` m whose ray is inside the
     terrain at ``near`` (the true surface crossed before it: ``_beyond_wall``) is kept as it is:
     a sensor only needs to know it is nearer (a lidar's minimum range)."""
+    origin, R, radius, slope, A, m, k, phase = wall.origin, wall.R, wall.radius, wall.slope, wall.A, wall.m, wall.k, \
+        wall.phase
+    Am, Ak, by_size, tail, order, table = wall.Am, wall.Ak, wall.by_size, wall.tail, wall.order, wall.table
+    s0, h, surface, top, region_material = wall.s0, wall.h, wall.surface, wall.top, wall.region_material
     powers = np.empty((4, max(order + 1, A.shape[0])))
     n = np.empty(3)
     for q in range(rays.shape[0]):
