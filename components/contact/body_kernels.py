@@ -20,7 +20,7 @@ from numba import njit
 
 from ..kernel_args import record
 from ..kernel_reductions import same_bits
-from .contact_law import add_slip, begin_law, finish_law, skin_law
+from .contact_law import add_slip, begin_law, finish_law, law_locals, skin_law
 from .jacobian_kernels import body_jacobian_blocks
 from .kernels_numba import add_wrench, point_contact_force
 from ..multibody.pose_quaternions import pose_rotation
@@ -48,8 +48,7 @@ def body_contact_wrenches(table, work, ports, mats, m):
     out_wrench[:, :] = 0.0
     out_link_fn[:] = 0.0
     begin_law(law, m, distance, owner)
-    law_mu, law_ev, power, speed, row_fn = law.mu_scale, law.ev_scale, law.slip_power, law.slip_speed, law.row_fn
-    v_eps, mode, ev_floor = law.v_eps, law.mode, law.ev_floor
+    law_mu, law_ev, power, speed, row_fn, v_eps, mode, ev_floor = law_locals(law)
     n_contact = 0
     for i in range(m):
         d = -distance[i]

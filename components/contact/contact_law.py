@@ -58,6 +58,14 @@ def skin_law(mats, mat, mu_factor, ratio, mu_scale, ev_scale):
     return mats[mat, K], mats[mat, C], mats[mat, MU] * mu_factor * mu_scale, ratio * ev_scale, 0.0
 
 
+@njit(cache=True, inline="always")
+def law_locals(law):
+    """The record's fields a force or Jacobian kernel reads in its loop, as locals: (mu_scale, ev_scale,
+    slip_power, slip_speed, row_fn, v_eps, mode, ev_floor)."""
+    return (law.mu_scale, law.ev_scale, law.slip_power, law.slip_speed, law.row_fn, law.v_eps, law.mode,
+            law.ev_floor)
+
+
 @njit(cache=True)
 def begin_law(law, m, distance, owner):
     """Before an evaluation's contacts: check the inputs (``law.bad_row[0]``: the first row out of range,

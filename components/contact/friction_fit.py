@@ -31,6 +31,8 @@ import numpy as np
 
 from snakesim.components.materials import Material
 from snakesim.framework import SnakesimError
+from snakesim.framework.errors import ConfigError
+from snakesim.framework.yaml_source import read_text
 
 from ..csv_numbers import finite_number
 
@@ -84,9 +86,9 @@ def read_drag_tests(path) -> DragTests:
     """Parse and validate a drag-test CSV; every problem names file:line, column and value."""
     path = Path(path)
     try:
-        text = path.read_text()
-    except OSError as e:
-        raise FrictionDataError(f"{path}: cannot read drag-test data: {e.strerror or e}") from None
+        text = read_text(path, "a drag-test CSV")       # the reading (and its messages) every text input shares
+    except ConfigError as e:
+        raise FrictionDataError(str(e)) from None
     rows = [(i + 1, line) for i, line in enumerate(text.splitlines()) if line.strip() and not line.lstrip().startswith("#")]
     if not rows:
         raise FrictionDataError(f"{path}: no header and no data (expected columns {', '.join(COLUMNS)})")

@@ -28,7 +28,7 @@ import numpy as np
 from numba import njit
 
 from ..multibody.pose_quaternions import pose_rotation
-from .contact_law import material_law, skin_law
+from .contact_law import law_locals, material_law, skin_law
 from .point_kernels import world_axis
 
 
@@ -155,6 +155,14 @@ def add_lever_rank1(r, g, m, out):
             out[i, j] += ai * b[j]
 
 
+@njit(cache=True, inline="always")
+def _point_scratch():
+    """Per-call scratch of a Jacobian-block kernel: ∂F/∂v, ∂F/∂p (3×3), point_jacobian's W (3×3×3), a
+    rotation, and 3-vectors for ê, the lever arm, n̂, v and g·(−k)."""
+    return (np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3, 3)), np.empty((3, 3)), np.empty(3), np.empty(3),
+            np.empty(3), np.empty(3), np.empty(3))
+
+
 @njit(cache=True)
 def _clear_marked(d_twist, d_pose, on_link):
     """Zero the blocks of the links marked in on_link (the last evaluation's) and unmark them."""
@@ -183,17 +191,9 @@ def contact_jacobian_blocks(samples, work, ports, mats, m, d_twist, d_pose, on_l
         samples.parent_row
     lead_angle, hand, near, lookahead_time = samples.lead_angle, samples.hand, samples.near, samples.lookahead_time
     _clear_marked(d_twist, d_pose, on_link)
-    Dv = np.empty((3, 3))
-    Dp = np.empty((3, 3))
-    W = np.empty((3, 3, 3))
-    R = np.empty((3, 3))
-    e = np.empty(3)
-    rc = np.empty(3)
-    nrm = np.empty(3)
-    vv = np.empty(3)
-    gk = np.empty(3)
+    Dv, Dp, W, R, e, rc, nrm, vv, gk = _point_scratch()
     count = 0
-    mu_scale, ev_scale, v_eps, mode, ev_floor = law.mu_scale, law.ev_scale, law.v_eps, law.mode, law.ev_floor
+    mu_scale, ev_scale, _, _, _, v_eps, mode, ev_floor = law_locals(law)
     last = -1                  # rows come grouped by screw: its axis and thread once per screw
     o = 0
     a0 = a1 = a2 = cl = sl = 0.0
@@ -252,17 +252,9 @@ def body_jacobian_blocks(table, work, ports, mats, m, d_twist, d_pose, on_link):
     point, vel, poses, law = work.points, work.vel, ports.poses, ports.law
     piece_link, axis_B, mu_scale, skin_ratio = table.piece_link, table.axis_B, table.mu_scale, table.skin_ratio
     _clear_marked(d_twist, d_pose, on_link)
-    Dv = np.empty((3, 3))
-    Dp = np.empty((3, 3))
-    W = np.empty((3, 3, 3))
-    R = np.empty((3, 3))
-    e = np.empty(3)
-    rc = np.empty(3)
-    nrm = np.empty(3)
-    vv = np.empty(3)
-    gk = np.empty(3)
+    Dv, Dp, W, R, e, rc, nrm, vv, gk = _point_scratch()
     count = 0
-    law_mu, law_ev, v_eps, mode, ev_floor = law.mu_scale, law.ev_scale, law.v_eps, law.mode, law.ev_floor
+    law_mu, law_ev, _, _, _, v_eps, mode, ev_floor = law_locals(law)
     for i in range(m):
         d = -distance[i]
         if not d > 0.0:

@@ -20,7 +20,7 @@ from numba import njit
 from ..kernel_args import record
 from ..multibody.pose_quaternions import pose_rotation
 from .evaluation_kernels import count_evaluation
-from .contact_law import add_slip, begin_law, finish_law, material_law
+from .contact_law import add_slip, begin_law, finish_law, law_locals, material_law
 from .kernels_numba import add_wrench, point_contact_force
 from .point_kernels import world_axis
 
@@ -61,8 +61,7 @@ def contact_wrenches(samples, work, ports, mats, near, m):
     out_wrench[:, :] = 0.0
     out_screw_fn[:] = 0.0
     begin_law(law, m, distance, owner)
-    mu_scale, ev_scale, power, speed, row_fn = law.mu_scale, law.ev_scale, law.slip_power, law.slip_speed, law.row_fn
-    v_eps, mode, ev_floor = law.v_eps, law.mode, law.ev_floor
+    mu_scale, ev_scale, power, speed, row_fn, v_eps, mode, ev_floor = law_locals(law)
     n_contact = 0
     last = -1                  # rows come grouped by screw: its rotation, axis and thread once per screw
     b = 0
