@@ -2,8 +2,10 @@
 
 ``prepare`` checks the dispersion file against the scene (every path resolved
 with the scene, component parameter names checked against the component's
-Params, metrics against what the scene records) and samples all N runs before
-anything runs. ``run_campaign`` submits the runs not yet recorded in OUT (a
+Params, metrics against what the scene records) before anything runs; run i's
+sample is drawn when run i is submitted (``Samples``), so any N starts at once,
+and an N whose records could not be held (``RECORD_BYTES`` a run, against the
+memory limit) is refused up front with the estimate. ``run_campaign`` submits the runs not yet recorded in OUT (a
 bounded window of futures, so a campaign of 10^5 runs holds ~2 per worker in
 flight), appends each finished run's record, and rebuilds the table at the end
 or on interruption.
@@ -18,14 +20,18 @@ from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 from pathlib import Path
 
-from snakesim.framework.errors import ConfigError
+from snakesim.framework.errors import ConfigError, SnakesimError
 
-from .dispersions import DispersionFile, grid_size, load_dispersions, sample, set_item
+from .dispersions import DispersionFile, Samples, grid_size, load_dispersions, set_item
 from .metrics import parse_metrics
 from .results import RecordLog, check_identity, write_table
 from .runner import RunTask, SceneSpec
 
 WINDOW_PER_SLOT = 2          # futures in flight per worker thread: keeps workers busy, Ctrl-C prompt
+#: bytes a finished run takes in memory (its record, kept for the table, and its row of the table)
+RECORD_BYTES = 4000
+#: the least time a base step takes (s): the CPU-time estimate of a refused campaign is a lower bound
+MIN_STEP_S = 1e-6
 
 
 @dataclass
@@ -36,7 +42,7 @@ class Plan:
     dispersions: DispersionFile
     n: int
     seed: int
-    samples: list[dict]
+    samples: Samples | list[dict]      # run i's values, drawn when asked for
     metrics: tuple | None
 
     def identity(self) -> dict:
@@ -89,7 +95,7 @@ def prepare(scene: SceneSpec, dispersion_file: str, n, seed: int | None = None, 
     seed = df.seed if seed is None else seed
     if seed < 0:
         raise ConfigError(f"the seed must be a non-negative integer, got {seed}", "--seed")
-    samples = sample(df, n, seed)
+    samples = Samples(df, n, seed)
     flags = dict(scene.sim)
     for d in df.dispersions:
         parts = d.path.split(".")
@@ -106,7 +112,44 @@ def prepare(scene: SceneSpec, dispersion_file: str, n, seed: int | None = None, 
     for d in df.dispersions:
         resolved = _check_path(scene, d, samples[0][d.path], reg)
     _check_metric_signals(metrics, resolved, df.path)
+    check_campaign_size(n, resolved)
     return Plan(scene=scene, dispersions=df, n=n, seed=seed, samples=samples, metrics=metrics)
+
+
+def campaign_estimate(n: int, resolved=None) -> dict:
+    """What N runs need: memory for their records and table (bytes), and (with the resolved scene) base steps
+    a run and a lower bound on the CPU time of all of them (s, at :data:`MIN_STEP_S` a step)."""
+    est = {"runs": n, "memory_bytes": n * float(RECORD_BYTES), "steps_per_run": None, "cpu_s_at_least": None}
+    sim = getattr(resolved, "sim", None)
+    if sim is not None and getattr(sim, "duration", None) and getattr(sim, "dt", None):
+        steps = max(1.0, float(sim.duration) / float(sim.dt))
+        est.update(steps_per_run=steps, cpu_s_at_least=n * steps * MIN_STEP_S)
+    return est
+
+
+def _fmt_time(s: float) -> str:
+    for unit, size in (("years", 3.156e7), ("days", 86400.0), ("h", 3600.0), ("min", 60.0)):
+        if s >= size:
+            return f"{s / size:.3g} {unit}"
+    return f"{s:.3g} s"
+
+
+def check_campaign_size(n: int, resolved=None) -> None:
+    """Refuse, before anything is drawn or run, a campaign whose records would not fit in memory, with the
+    estimate of its memory and time and the largest N that fits."""
+    from snakesim.framework.limits import fmt_bytes, memory_limit_bytes
+
+    est, limit = campaign_estimate(n, resolved), memory_limit_bytes()
+    if est["memory_bytes"] <= limit:
+        return
+    time_text = ""
+    if est["cpu_s_at_least"] is not None:
+        time_text = (f"; each run is {est['steps_per_run']:.3g} steps, so even at {MIN_STEP_S * 1e6:g} µs a step "
+                     f"they take at least {_fmt_time(est['cpu_s_at_least'])} of CPU time")
+    raise ConfigError(f"{n} runs: their records and table would take ~{fmt_bytes(est['memory_bytes'])} "
+                      f"(~{fmt_bytes(RECORD_BYTES)} a run), over the memory limit {fmt_bytes(limit)} (half the "
+                      f"physical memory, or SNAKESIM_MEMORY_LIMIT){time_text}; at most {int(limit // RECORD_BYTES)} "
+                      f"runs fit in one campaign: split it (--seed, separate --out folders)", "-n")
 
 
 def _check_metric_signals(metrics, resolved, file: str) -> None:
@@ -173,20 +216,22 @@ def run_campaign(plan: Plan, out: Path, backend, *, save_runs: bool = False, tim
     records = log.load()
     if retry_failed:
         records = {i: r for i, r in records.items() if r.get("status") not in ("error", "timeout")}
-    todo = [i for i in range(plan.n) if i not in records]
+    # the runs to do, in order, generated as the window frees (never a list of N)
+    n_todo = plan.n - sum(1 for i in records if 0 <= i < plan.n)
+    queue = (i for i in range(plan.n) if i not in records)
     if not quiet and stream is None:
         g = grid_size(plan.dispersions.dispersions)
         if g > 1 and plan.n % g:
             print(f"note: N = {plan.n} is not a multiple of the grid's {g} points: the first "
                   f"{plan.n % g} points run once more than the rest", file=sys.stderr)
         if resumed:
-            print(f"resuming {out}: {len(records)} of {plan.n} runs recorded, {len(todo)} to run", file=sys.stderr)
+            print(f"resuming {out}: {len(records)} of {plan.n} runs recorded, {n_todo} to run", file=sys.stderr)
     progress = Progress(plan.n, len(records), stream=stream, quiet=quiet)
-    if todo:
+    if n_todo:
         progress.show(force=True)
     window = WINDOW_PER_SLOT * backend.slots
     pending: dict = {}
-    queue = list(reversed(todo))
+    queue_done = n_todo == 0
     ran = 0
 
     def finish(rec):
@@ -199,9 +244,12 @@ def run_campaign(plan: Plan, out: Path, backend, *, save_runs: bool = False, tim
     from .runner import execute
 
     try:
-        while queue or pending:
-            while queue and len(pending) < window and (stop_after is None or ran + len(pending) < stop_after):
-                i = queue.pop()
+        while not queue_done or pending:
+            while not queue_done and len(pending) < window and (stop_after is None or ran + len(pending) < stop_after):
+                i = next(queue, None)
+                if i is None:
+                    queue_done = True
+                    break
                 task = plan.task(i, out, save_runs, timeout_s)
                 pending[backend.executor.submit(execute, task)] = task
             if not pending:
@@ -224,12 +272,24 @@ def run_campaign(plan: Plan, out: Path, backend, *, save_runs: bool = False, tim
                     finish(_lost(task, "worker pool broke (another run's worker process died) while in flight"))
                 pending.clear()
                 backend.restart()
-    finally:
-        progress.close()
-        for fut in pending:
-            fut.cancel()
-        table = write_table(out, records, [d.path for d in plan.dispersions.dispersions])
+    except BaseException:
+        # the table is still written from what finished; when that fails too (a full disk), the first
+        # error is the one reported
+        _close(progress, pending)
+        try:
+            write_table(out, records, [d.path for d in plan.dispersions.dispersions])
+        except SnakesimError:
+            pass
+        raise
+    _close(progress, pending)
+    table = write_table(out, records, [d.path for d in plan.dispersions.dispersions])
     return {"records": records, "table": table, "ran": ran, "resumed": resumed}
+
+
+def _close(progress: Progress, pending: dict) -> None:
+    progress.close()
+    for fut in pending:
+        fut.cancel()
 
 
 def _lost(task: RunTask, reason: str) -> dict:

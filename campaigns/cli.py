@@ -61,6 +61,7 @@ def sweep(assembly, dispersions, n, seed, out_dir, sets, config, duration, dt, i
     from .campaign import prepare, run_campaign
     from .report import summarize
     from .runner import SceneSpec
+    from snakesim.framework.run_files import check_writable_dir
 
     if sum(x is not None for x in (workers, scheduler, dask_local)) > 1:
         raise click.UsageError("choose one back end: --workers (local pool), --scheduler or --dask-local")
@@ -75,6 +76,7 @@ def sweep(assembly, dispersions, n, seed, out_dir, sets, config, duration, dt, i
     out = Path(out_dir) if out_dir else Path("sweeps") / f"{Path(assembly).stem}-{Path(dispersions).stem}"
     try:
         plan = prepare(scene, dispersions, n, seed)        # every check, before any run or back end
+        check_writable_dir(out, "--out")                   # where the campaign writes, before any run
         backend = (dask_scheduler(scheduler, connect_timeout) if scheduler else
                    start_dask_local(dask_local) if dask_local else local_pool(workers))
     except SnakesimError as e:
@@ -92,7 +94,10 @@ def sweep(assembly, dispersions, n, seed, out_dir, sets, config, duration, dt, i
         sys.exit(130)
     except SnakesimError as e:
         raise click.ClickException(str(e)) from None
-    summary = summarize(res["table"], out, plan.dispersions.success, plots=not no_plots)
+    try:
+        summary = summarize(res["table"], out, plan.dispersions.success, plots=not no_plots)
+    except SnakesimError as e:      # a full or read-only disk: the file and the cause (framework/output_files.py)
+        raise click.ClickException(str(e)) from None
     counts = ", ".join(f"{v} {k}" for k, v in summary["by_status"].items())
     click.echo(f"{summary['runs']} runs ({counts}); success rate {summary['success_rate']:.1%}", err=True)
     for r in summary["sensitivity_top"][:5]:

@@ -239,10 +239,63 @@ def grid_size(disps) -> int:
     return int(np.prod([len(d.args["values"]) for d in disps if d.dist == "grid"] or [1]))
 
 
+#: bytes a Latin-hypercube column holds per run while it is drawn and kept (permutation, jitter, values)
+LHS_BYTES_PER_RUN = 64
+#: bytes a run's values take in the list ``sample`` returns (a dict of Python values a run)
+SAMPLE_BYTES_PER_RUN = 400
+
+
+def _check_sample_memory(n: int, per_run: float, what: str) -> None:
+    """Refuse, before anything is allocated, ``n`` runs' ``what`` when it would pass the memory limit."""
+    from snakesim.framework.limits import fmt_bytes, memory_limit_bytes
+
+    need, limit = n * per_run, memory_limit_bytes()
+    if need > limit:
+        raise ConfigError(f"{n} runs: {what} would take ~{fmt_bytes(need)} ({per_run:g} B a run), over the memory "
+                          f"limit {fmt_bytes(limit)} (half the physical memory, or SNAKESIM_MEMORY_LIMIT); at most "
+                          f"{int(limit // per_run)} runs fit", "-n")
+
+
+class Samples:
+    """The N runs' values, drawn when a run is asked for (``samples[i]``): a campaign of any N starts at
+    once and holds only the runs in flight. Run i equals :func:`sample_run` (random draws, grid points);
+    Latin-hypercube columns are a design over all N, drawn up front (refused when they would not fit)."""
+
+    def __init__(self, df: DispersionFile, n: int, seed: int | None = None):
+        if isinstance(n, bool) or not isinstance(n, int) or n <= 0:
+            raise ConfigError(f"the number of runs must be a positive integer, got {n!r}", "-n")
+        self.df, self.n = df, n
+        self.seed = df.seed if seed is None else seed
+        lhs = [(j, d) for j, d in enumerate(df.dispersions) if d.dist != "grid" and d.sampling == "lhs"]
+        if lhs:
+            _check_sample_memory(n, LHS_BYTES_PER_RUN * len(lhs), "the Latin-hypercube design")
+        self._lhs = {d.path: d.ppf(_lhs_column(self.seed, j, n)) for j, d in lhs}
+
+    def __len__(self) -> int:
+        return self.n
+
+    def __getitem__(self, i):
+        if isinstance(i, slice):
+            return [self[k] for k in range(*i.indices(self.n))]
+        if i < 0:
+            i += self.n
+        if not 0 <= i < self.n:
+            raise IndexError(f"run {i} of {self.n}")
+        row = sample_run(self.df, i, self.seed)
+        for path, col in self._lhs.items():
+            row[path] = col[i]
+        return row
+
+    def __iter__(self):
+        return (self[i] for i in range(self.n))
+
+
 def sample(df: DispersionFile, n: int, seed: int | None = None) -> list[dict]:
-    """The N runs' parameter values, ``[{path: value, ...}, ...]`` in file order (run i = row i)."""
+    """The N runs' parameter values, ``[{path: value, ...}, ...]`` in file order (run i = row i), all at
+    once (refused when they would not fit in memory; a campaign draws them lazily: :class:`Samples`)."""
     if isinstance(n, bool) or not isinstance(n, int) or n <= 0:
         raise ConfigError(f"the number of runs must be a positive integer, got {n!r}", "-n")
+    _check_sample_memory(n, SAMPLE_BYTES_PER_RUN + LHS_BYTES_PER_RUN * len(df.dispersions), "drawing every sample")
     seed = df.seed if seed is None else seed
     cols: dict[str, list] = {}
     grids = [(j, d) for j, d in enumerate(df.dispersions) if d.dist == "grid"]

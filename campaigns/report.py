@@ -68,6 +68,20 @@ def _bins(x: np.ndarray, nbins: int = 10):
     return out
 
 
+def _save(fig, path: Path, dpi: int) -> None:
+    """The figure as PNG, written whole or not at all (framework/output_files.py); the figure closed."""
+    import io
+
+    import matplotlib.pyplot as plt
+
+    try:
+        buf = io.BytesIO()
+        fig.savefig(buf, format="png", dpi=dpi)
+        atomic_write(path, buf.getvalue())
+    finally:
+        plt.close(fig)
+
+
 def _grid(n: int):
     cols = min(4, max(1, n))
     return (n + cols - 1) // cols, cols
@@ -102,8 +116,7 @@ def plot(table, params: list[str], metrics: list[str], ok: np.ndarray, out: Path
             ax.axis("off")
         fig.suptitle(f"successful runs ({int(ok.sum())} of {len(ok)})", fontsize=9)
         fig.tight_layout()
-        fig.savefig(out / "hist.png", dpi=110)
-        plt.close(fig)
+        _save(fig, out / "hist.png", 110)
         written.append("hist.png")
     num_pars = [(p, x) for p in pars if (x := _numeric(table.column(p))) is not None]
     if num_pars and mets:
@@ -121,8 +134,7 @@ def plot(table, params: list[str], metrics: list[str], ok: np.ndarray, out: Path
                 if j == 0:
                     ax.set_ylabel(m, fontsize=6)
         fig.tight_layout()
-        fig.savefig(out / "scatter.png", dpi=100)
-        plt.close(fig)
+        _save(fig, out / "scatter.png", 100)
         written.append("scatter.png")
     if pars:
         r, c = _grid(len(pars))
@@ -143,8 +155,7 @@ def plot(table, params: list[str], metrics: list[str], ok: np.ndarray, out: Path
         for ax in list(axes.flat)[len(pars):]:
             ax.axis("off")
         fig.tight_layout()
-        fig.savefig(out / "success_by_parameter.png", dpi=110)
-        plt.close(fig)
+        _save(fig, out / "success_by_parameter.png", 110)
         written.append("success_by_parameter.png")
     return written
 

@@ -14,10 +14,10 @@ from __future__ import annotations
 
 import json
 import math
-import os
 from pathlib import Path
 
 from snakesim.framework.errors import SnakesimError
+from snakesim.framework.output_files import append_line, make_dir, output_error, write_file
 
 RECORDS = "runs.jsonl"
 IDENTITY = "campaign.json"
@@ -33,22 +33,23 @@ class CampaignError(SnakesimError):
 
 
 def atomic_write(path: Path, data: bytes | str) -> None:
-    """Write ``path`` through a temporary file in the same folder and ``os.replace``."""
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    with open(tmp, "wb") as fh:
-        fh.write(data.encode() if isinstance(data, str) else data)
-        fh.flush()
-        os.fsync(fh.fileno())
-    os.replace(tmp, path)
+    """Write ``path`` through a temporary file in the same folder and ``os.replace``
+    (framework/output_files.py: a failure leaves no partial file and is an error naming the file)."""
+    write_file(path, data)
 
 
 def check_identity(out: Path, identity: dict, fresh: bool = False) -> bool:
     """Write OUT/campaign.json, or check it against an earlier one; True when resuming."""
-    out.mkdir(parents=True, exist_ok=True)
+    make_dir(out)
     path = out / IDENTITY
     if path.exists() and not fresh:
-        old = json.loads(path.read_text())
+        try:
+            old = json.loads(path.read_text())
+        except OSError as e:
+            raise output_error(path, e, "cannot read") from None
+        except ValueError:
+            raise CampaignError(f"{path} is not a campaign's JSON (a torn or foreign file); use another --out, "
+                                f"or --fresh to start over") from None
         diff = [k for k in identity if old.get(k) != identity[k]]
         if diff:
             raise CampaignError(f"{out} holds a different campaign ({', '.join(diff)} differ); "
@@ -56,7 +57,10 @@ def check_identity(out: Path, identity: dict, fresh: bool = False) -> bool:
         return True
     if fresh:
         for name in (RECORDS, "results.parquet", "results.csv"):
-            (out / name).unlink(missing_ok=True)
+            try:
+                (out / name).unlink(missing_ok=True)
+            except OSError as e:
+                raise output_error(out / name, e, "cannot remove") from None
     atomic_write(path, json.dumps(identity, indent=2, default=str))
     return False
 
@@ -81,17 +85,17 @@ class RecordLog:
                     break           # the campaign was killed mid-write: everything after is lost
                 good_bytes += len(line)
         if good_bytes != self.path.stat().st_size:
-            with open(self.path, "r+b") as fh:
-                fh.truncate(good_bytes)
+            try:
+                with open(self.path, "r+b") as fh:
+                    fh.truncate(good_bytes)
+            except OSError as e:
+                raise output_error(self.path, e, "cannot cut the torn last line of") from None
         return records
 
     def append(self, rec: dict) -> None:
         # one write of one line, then fsync: a kill leaves at most a torn last line, which load() drops
-        line = (json.dumps(rec, default=str) + "\n").encode()
-        with open(self.path, "ab") as fh:
-            fh.write(line)
-            fh.flush()
-            os.fsync(fh.fileno())
+        # (a failed append is cut back: framework/output_files.py)
+        append_line(self.path, json.dumps(rec, default=str) + "\n")
 
 
 def _column_type(values):

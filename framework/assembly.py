@@ -25,6 +25,7 @@ which loads and runs again as it is.
 from __future__ import annotations
 
 import difflib
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal
@@ -94,6 +95,10 @@ class IncludeSpec(_Strict):
     as_: str | None = Field(None, alias="as")
     repeat: int = Field(1, ge=0, le=MAX_REPEAT, strict=True)
     params: dict = Field(default_factory=dict)
+
+
+#: the top-level keys whose mapping has a fixed set of keys (listed when the key is not a mapping)
+_TOP_SCHEMAS = {"sim": SimSpec}
 
 
 @dataclass
@@ -196,21 +201,43 @@ def _prefixed(path: str, prefix: str | None) -> str:
     return f"{prefix}/{path}" if prefix else path
 
 
-def _expand(data: LocatedDict, scope: dict, prefix: str | None, search_path, base_dir: Path,
-            out: dict, depth: int = 0) -> None:
-    if depth > 20:
-        raise ConfigError("includes nest more than 20 deep (an assembly includes itself?)", data.where())
+def _check_top_level(data: dict) -> None:
+    """One layer's top-level keys (an assembly, an included one, a ``--config`` file, a ``--set``): known
+    keys, each of its type. Checked per layer, before merging: a later layer must not hide a bad value."""
     unknown = [k for k in data if k not in TOP_KEYS]
     if unknown:
         k = unknown[0]
         close = difflib.get_close_matches(str(k), TOP_KEYS, n=1)
         raise ConfigError(f"unknown top-level key '{k}'" + (f"; did you mean '{close[0]}'?" if close else "")
-                          + f" (valid: {', '.join(TOP_KEYS)})", data.where(k), k)
+                          + f" (valid: {', '.join(TOP_KEYS)})", data.where(k) if hasattr(data, "where") else None, k)
     for k, (kind, what) in _TOP_TYPES.items():
         if data.get(k) is not None and not isinstance(data[k], kind):
             got = next((w for t, w in ((bool, "a boolean"), (int, "a number"), (float, "a number"), (str, "a string"),
                                        (list, "a list"), (dict, "a mapping")) if isinstance(data[k], t)), "a value")
-            raise ConfigError(f"'{k}' must be {what}, got {got}: {str(data[k])[:60]!r}", data.where(k), k)
+            keys = f"; valid keys: {', '.join(_TOP_SCHEMAS[k].model_fields)}" if k in _TOP_SCHEMAS else ""
+            raise ConfigError(f"'{k}' must be {what}, got {got}: {str(data[k])[:60]!r}{keys}",
+                              data.where(k) if hasattr(data, "where") else None, k)
+
+
+#: a component's full name: parts of letters, digits, '_' and '-', joined by '/' (an include's prefix);
+#: '.' separates the component from its port in 'comp.port', and ',', '->' and spaces split connections
+_NAME = re.compile(r"[A-Za-z0-9_-]+(/[A-Za-z0-9_-]+)*")
+_NAME_RULE = "letters, digits, '_' and '-', with '/' between an include's prefix and the name"
+
+
+def _check_name(name: str, what: str, where, key: str) -> None:
+    if not _NAME.fullmatch(name):
+        bad = sorted({c for c in name if not (c.isascii() and (c.isalnum() or c in "_-/"))})
+        why = f"it contains {', '.join(repr(c) for c in bad)}" if bad else "an empty part between '/'"
+        raise ConfigError(f"{what} '{name}' is not a valid name ({why}): a name is used in 'component.port' "
+                          f"references and connections, so it may hold only {_NAME_RULE}", where, key)
+
+
+def _expand(data: LocatedDict, scope: dict, prefix: str | None, search_path, base_dir: Path,
+            out: dict, depth: int = 0) -> None:
+    if depth > 20:
+        raise ConfigError("includes nest more than 20 deep (an assembly includes itself?)", data.where())
+    _check_top_level(data)
 
     # includes first, so the including file can wire and record into them
     includes = data.get("include") or []
@@ -247,6 +274,8 @@ def _expand(data: LocatedDict, scope: dict, prefix: str | None, search_path, bas
             sub_scope["i"] = i
             name = substitute(raw.get("as"), iscope) if raw.get("as") else (
                 path.stem + (str(i) if inc.repeat > 1 else ""))
+            _check_name(str(name), "include prefix" if raw.get("as") else f"include prefix (from the file name {path.name};"
+                        " give 'as')", where_in(raw, ["as"]) or where, f"include[{n}].as")
             _expand(sub, sub_scope, _prefixed(str(name), prefix), search_path, path.parent, out, depth + 1)
 
     comps = substitute(data.get("components") or LocatedDict(), scope)
@@ -263,8 +292,7 @@ def _expand(data: LocatedDict, scope: dict, prefix: str | None, search_path, bas
             continue
         if full in out["components"] and not (isinstance(spec, dict) and "type" not in spec):
             raise ConfigError(f"component '{full}' defined twice (also at {out['where'][full]})", where, f"components.{cname}")
-        if "." in str(cname) or " " in str(cname):
-            raise ConfigError(f"component name '{cname}' may not contain '.' or spaces", where, f"components.{cname}")
+        _check_name(full, "component name", where, f"components.{cname}")
         out["components_raw"][full] = spec
         out["components"][full] = None
         out["where"][full] = where
@@ -307,6 +335,14 @@ def _expand(data: LocatedDict, scope: dict, prefix: str | None, search_path, bas
         out["stop"].append((spec, where))
 
 
+def _sim_layer(values: dict) -> LocatedDict:
+    """The layer of the explicit command-line flags (``--dt``, ``--integrator``...): ``sim`` keys."""
+    flags = LocatedDict(values)
+    layer = LocatedDict(sim=flags)
+    layer.file = flags.file = "command line"
+    return layer
+
+
 def _check_declared(given: dict, declared: dict, key: str, assembly: str) -> None:
     """A later layer may set parameters the assembly declares, never invent one (a typo)."""
     for k, v in given.items():
@@ -331,24 +367,29 @@ def resolve(assembly: str | Path | None, *, search_path=(), config_files=(), ove
     data = locate_strings(load_yaml(path))       # paths in a file are relative to that file (paths.py)
     if not isinstance(data, dict):
         raise ConfigError("an assembly must be a YAML mapping", str(path))
+    _check_top_level(data)
     declared = data.get("parameters") or {}
+    flags = None
+    if sim_overrides:
+        flags = LocatedDict({k: v for k, v in sim_overrides.items() if v is not None})
+        flags.file = "command line"
+    if flags and "integrator" in flags:
+        # --integrator chooses the integrator the layers below it refine: a config file's or --set's
+        # sim.integrator.params (no name) are for it, so it is chosen first, then again last (it wins)
+        data = merge_layer(data, _sim_layer({"integrator": flags["integrator"]}))
     for cf in config_files:
         layer = locate_strings(load_yaml(cf))
         if not isinstance(layer, dict):
             raise ConfigError("a config file must be a YAML mapping", str(cf))
-        bad = [k for k in layer if k not in TOP_KEYS]
-        if bad:
-            raise ConfigError(f"unknown top-level key '{bad[0]}' (valid: {', '.join(TOP_KEYS)})",
-                              layer.where(bad[0]), bad[0])
+        _check_top_level(layer)
         data = merge_layer(data, layer)
     for item in overrides:
-        params_now = data.get("parameters")        # a wrong type is reported by _expand, naming it
-        data = merge_layer(data, set_override(item, dict(params_now) if isinstance(params_now, dict) else {}))
-    if sim_overrides:
-        flags = LocatedDict({k: v for k, v in sim_overrides.items() if v is not None})
-        layer = LocatedDict(sim=flags)
-        layer.file = flags.file = "command line"
+        params_now = data.get("parameters")
+        layer = set_override(item, dict(params_now) if isinstance(params_now, dict) else {})
+        _check_top_level(layer)
         data = merge_layer(data, layer)
+    if flags:
+        data = merge_layer(data, _sim_layer(flags))
 
     parameters = data.get("parameters") or LocatedDict()
     if not isinstance(parameters, dict):

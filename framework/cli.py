@@ -35,13 +35,62 @@ def _fail(e: Exception):
 
 
 def _progress(stream=None):
-    def report(t, t_end):
-        out = stream or sys.stderr  # looked up per call: stderr may be redirected after import
+    return _ProgressLine(stream)
+
+
+class _ProgressLine:
+    """The progress line, redrawn in place on stderr (called with t, t_end). While it is in use (``with``),
+    anything else written to stderr (a Python warning, a log record, a component's message) starts on a line
+    of its own: the progress line is cleared first and drawn again at the next report."""
+
+    def __init__(self, stream=None):
+        self.stream, self.shown, self._under = stream, 0, None
+
+    def _out(self):
+        # looked up per call: stderr may be redirected after import; inside ``with``, the stream under the guard
+        return self.stream or self._under or sys.stderr
+
+    def __call__(self, t, t_end):
         frac = min(1.0, t / t_end) if t_end else 1.0
         bar = "#" * int(30 * frac)
-        out.write(f"\r  [{bar:<30}] {100 * frac:5.1f}%  t = {t:.2f} / {t_end:.2f} s")
+        text = f"  [{bar:<30}] {100 * frac:5.1f}%  t = {t:.2f} / {t_end:.2f} s"
+        out = self._out()
+        out.write("\r" + text)
         out.flush()
-    return report
+        self.shown = len(text)
+
+    def clear(self):
+        if self.shown:
+            out = self._out()
+            out.write("\r" + " " * self.shown + "\r")
+            out.flush()
+            self.shown = 0
+
+    def __enter__(self):
+        self._under = sys.stderr
+        sys.stderr = _LineGuard(self, self._under)
+        return self
+
+    def __exit__(self, *exc):
+        if isinstance(sys.stderr, _LineGuard) and sys.stderr.progress is self:
+            sys.stderr = self._under
+        self._under = None
+        return False
+
+
+class _LineGuard:
+    """stderr while a progress line is shown: clears the line before any other text is written."""
+
+    def __init__(self, progress: _ProgressLine, stream):
+        self.progress, self.stream = progress, stream
+
+    def write(self, text):
+        if text and self.progress.shown:
+            self.progress.clear()
+        return self.stream.write(text)
+
+    def __getattr__(self, name):
+        return getattr(self.stream, name)
 
 
 def _session(assembly, config, sets, extras=None, **sim):
@@ -169,7 +218,12 @@ def run(assembly, config, sets, duration, dt, integrator, realtime, out_dir, ove
             if not quiet:
                 click.echo(f"running {s.resolved.source}: {s.resolved.sim.duration:g} s at dt = {s.resolved.sim.dt:g} s "
                            f"with {s.integrator.name}", err=True)
-            result = s.run(out_dir=out_dir, progress=None if quiet else _progress())
+            _print_estimate(s, out_dir, quiet)
+            if quiet:
+                result = s.run(out_dir=out_dir, progress=None)
+            else:
+                with _progress() as progress:       # warnings during the run start on a line of their own
+                    result = s.run(out_dir=out_dir, progress=progress)
         except SnakesimError as e:
             _fail(e)
         except KeyboardInterrupt:       # a second Ctrl-C: stop at once
@@ -195,12 +249,40 @@ def run(assembly, config, sets, duration, dt, integrator, realtime, out_dir, ove
         click.echo(f"{sm['stop_reason']}: nothing was saved (no --out); run again with --out DIR to keep {what}, "
                    "a summary and the config", err=True)
     if code:
-        if not quiet and "interrupted" not in sm:
-            click.echo(f"failure ({sm['failure_kind']}): exit status {code}", err=True)
+        if "interrupted" not in sm:
+            # said even with --quiet (its only line then, with the reason): a failed run is never silent
+            reason = f"{sm['stop_reason']}: " if quiet else ""
+            click.echo(f"{reason}failure ({sm['failure_kind']}): exit status {code}", err=True)
         sys.exit(code)
 
 
 run.help = run.help.replace("EXIT_CODES", exit_codes_help())      # the one table: framework/outcomes.py
+
+
+#: a run of at least this many base steps, or whose recording takes at least this share of the memory
+#: limit, is told its size before it starts
+LONG_RUN_STEPS, LARGE_RECORDING_SHARE = 10**6, 0.1
+
+
+def _print_estimate(s, out_dir, quiet: bool) -> None:
+    """Before a long or large run starts: its steps, its recording's size in memory (and on disk with
+    --out) against the memory limit; a recording that cannot fit is warned about, even with --quiet,
+    with the record rate that fits (framework/recorder.py). Nothing is refused here that can run: the
+    recorder stops such a run at the limit, keeping its rows."""
+    from .limits import fmt_bytes
+    from .recorder import recording_estimate, recording_warning
+
+    duration = s.resolved.sim.duration
+    est = recording_estimate(s.plan, duration)
+    warning = recording_warning(est, duration)
+    if not quiet and (est["steps"] >= LONG_RUN_STEPS or est["bytes"] >= LARGE_RECORDING_SHARE * est["limit"]):
+        disk = f", ~{fmt_bytes(est['csv_bytes'])} of signals.csv in {out_dir}" if out_dir else ""
+        click.echo(f"estimate: {est['steps']:.4g} base steps (the wall time shows as the progress line's ETA once "
+                   f"it runs); the recording {est['rows']:.4g} rows x {est['columns']} signal columns at "
+                   f"sim.record_rate = {est['record_rate']:.4g} Hz, ~{fmt_bytes(est['bytes'])} in memory (limit "
+                   f"{fmt_bytes(est['limit'])}){disk}", err=True)
+    if warning:
+        click.echo(f"warning: {warning}", err=True)
 
 
 class _Interrupts:

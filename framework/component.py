@@ -167,6 +167,49 @@ def _params_argument(cls) -> type[BaseModel] | None:
     return None
 
 
+class SetupNumberError(ValueError):
+    """``setup()`` computed a number out of range (overflow, division by zero, an invalid operation):
+    the message names the component and, where one stands out, the parameter (``key``: its dotted
+    path under ``params``) and its value."""
+
+    #: a parameter this far from 1 (|log10|x|| over this) is the likely cause: its square overflows
+    EXTREME = 100
+
+    def __init__(self, message: str, key: str | None = None):
+        super().__init__(message)
+        self.key = key
+
+    @classmethod
+    def of(cls, comp: "Component", e: BaseException) -> "SetupNumberError":
+        what = f"{type(e).__name__}: {e}"
+        found = [(k, v) for k, v in _numbers(comp.p.model_dump()) if v != 0 and (
+            not np.isfinite(v) or abs(np.log10(abs(v))) > cls.EXTREME)]
+        if len(found) == 1:
+            k, v = found[0]
+            return cls(f"{comp.name}: parameter {k} = {v!r} is out of range for {type(comp).__name__}'s setup "
+                       f"({what}); valid: a magnitude between 1e-{cls.EXTREME} and 1e{cls.EXTREME} "
+                       "(its square and products must fit a double)", k)
+        if found:
+            listing = ", ".join(f"{k} = {v!r}" for k, v in found)
+            return cls(f"{comp.name}: setup of {type(comp).__name__} failed on a number out of range ({what}); "
+                       f"parameters out of range: {listing}; valid: magnitudes between 1e-{cls.EXTREME} and "
+                       f"1e{cls.EXTREME}")
+        return cls(f"{comp.name}: setup of {type(comp).__name__} failed on a number out of range ({what}); "
+                   "check its parameters' magnitudes")
+
+
+def _numbers(obj, prefix: str = ""):
+    """(dotted key, float) for every number in a params dump (nested mappings and lists included)."""
+    if isinstance(obj, dict):
+        for k, v in obj.items():
+            yield from _numbers(v, f"{prefix}{k}.")
+    elif isinstance(obj, (list, tuple)):
+        for i, v in enumerate(obj):
+            yield from _numbers(v, f"{prefix}{i}.")
+    elif isinstance(obj, (int, float)) and not isinstance(obj, bool):
+        yield prefix[:-1], float(obj)
+
+
 class Component(Generic[P]):
     Params: ClassVar[type[BaseModel]] = Params
     #: registry name, e.g. "pendulum"; set by the registry if left empty
@@ -237,7 +280,11 @@ class Component(Generic[P]):
         """Bind the resources (``{slot: object}``) and run ``setup()``: at construction, or later for a
         component made without its resources (a :class:`~.builder.Builder` binds them at build)."""
         self._bind_uses(uses)
-        self.setup()
+        try:
+            with np.errstate(over="raise"):      # an overflow in setup is an error there, not an inf later
+                self.setup()
+        except (OverflowError, FloatingPointError, ZeroDivisionError, RuntimeWarning) as e:
+            raise SetupNumberError.of(self, e) from e
         self.pending_uses = False
         for slot, prov in type(self).provides.items():
             obj = self.__dict__.get(slot)
@@ -328,6 +375,17 @@ class Component(Generic[P]):
         for name, port in ports.items():
             port.name = name
         self.inputs = {**type(self).inputs, **ports}
+
+    def before_run(self, t0: float, u) -> None:
+        """Optional: once before a run's first step, outside its timed loop (``Session.run``, a
+        ``Simulation``'s first advance; never ``snakesim check``): open what the first step would
+        otherwise open (a DDS participant and its endpoints, a recording file), so the run's wall time
+        and real-time factor measure the run. ``t0``: the run's start time, s; ``u``: its inputs, with
+        ``u.cache``."""
+
+    def after_run(self, u) -> None:
+        """Optional: once after a run's last step, whatever ended it: close what :meth:`before_run` (or
+        the first step) opened, so files are complete when the run returns and a next run opens afresh."""
 
     def hold(self, t: float, u) -> None:
         """Optional: called once per base step, after the discrete updates of tick t and before the

@@ -1,7 +1,9 @@
 """Configuration layering: assembly < config files < ``--set`` < explicit CLI flags.
 
 Mappings merge deeply, key by key; any other value (lists included) is
-replaced whole by the later layer. Every merged mapping keeps the position of
+replaced whole by the later layer, and so is a camera ``model`` whose ``kind``
+the later layer changes (pinhole to cahv: the pinhole's keys do not carry over,
+:data:`KIND_BLOCKS`), as is the integrator when another is named. Every merged mapping keeps the position of
 the layer each key came from, so errors still point at the right file.
 """
 
@@ -29,8 +31,20 @@ def deep_merge(base, over):
     for k, v in base.items():
         out[k] = v
     for k, v in over.items():
-        out[k] = deep_merge(base[k], v) if k in base else v
+        out[k] = v if k in KIND_BLOCKS and _switches_kind(base[k], v) else deep_merge(base[k], v) if k in base else v
     return out
+
+
+#: keys whose mapping is one of several schemas picked by its ``kind``, with keys of their own (a camera
+#: ``model``: a pinhole's ``fov`` is no CAHV key): a later layer naming another kind replaces the block
+#: whole, so the earlier kind's keys are neither carried over nor blamed on the later file. Mappings whose
+#: kinds share keys (a gait's params, a placement ``shape`` and its ``pose``) merge key by key as any other.
+KIND_BLOCKS = frozenset({"model"})
+
+
+def _switches_kind(base, over) -> bool:
+    return (isinstance(base, dict) and isinstance(over, dict) and "kind" in base and "kind" in over
+            and base["kind"] != over["kind"])
 
 
 def merge_layer(base, over):

@@ -205,7 +205,8 @@ def _instantiate(resolved: Resolved, registry) -> tuple[dict[str, Component], di
             raise config_error(e, cls.Params, where=where, key_prefix=f"components.{name}.params",
                                unknown="parameter", owner=cls.__name__) from None
         except (ValueError, TypeError) as e:
-            raise ConfigError(str(e), where, f"components.{name}") from None
+            key = getattr(e, "key", None)         # a setup number error that found its parameter (component.py)
+            raise ConfigError(str(e), where, f"components.{name}" + (f".params.{key}" if key else "")) from None
     return {n: built[n] for n in resolved.components}, _bound(binding)
 
 

@@ -265,3 +265,38 @@ class Recorder:
             fh.write(",".join(self.columns) + "\n")
             for part in self.chunks + ([self._chunk[: self._i]] if self._i else []):
                 np.savetxt(fh, part, fmt="%.17g", delimiter=",")
+
+
+#: bytes a value takes in signals.csv (17 significant digits, sign, exponent, separator)
+CSV_BYTES_PER_VALUE = 24
+
+
+def recording_estimate(plan, duration: float) -> dict:
+    """What a run of ``duration`` s will record, known before anything is allocated: ``steps`` (base steps),
+    ``rows`` (one each ``record_every`` steps, at ``record_rate`` Hz), ``columns`` (signal columns, t not
+    counted), ``bytes`` in memory (float64), ``csv_bytes`` (signals.csv, about), the memory ``limit``, and
+    ``fit_rate``: the highest record rate (Hz) whose recording fits the limit. Refuses (ConfigError)
+    only what cannot run at all: more than :data:`.limits.MAX_STEPS` steps."""
+    from .limits import step_count
+
+    steps = step_count(duration, plan.dt)
+    rows = steps // plan.record_every + 1
+    cols = 1 + sum(int(np.size(plan.out_buffers[ref])) if isinstance(plan.out_buffers[ref], np.ndarray) else 1
+                   for ref in plan.record_refs)
+    limit = memory_limit_bytes()
+    return {"steps": steps, "rows": rows, "columns": cols - 1, "record_rate": 1.0 / (plan.dt * plan.record_every),
+            "bytes": 8.0 * rows * cols, "csv_bytes": float(CSV_BYTES_PER_VALUE) * rows * cols, "limit": limit,
+            "fit_rate": float(f"{0.95 * limit / (8.0 * cols) / duration:.2g}")}
+
+
+def recording_warning(est: dict, duration: float) -> str | None:
+    """The warning for a recording (``recording_estimate``) that cannot fit the memory limit: the run would
+    stop with failure ``memory_limit`` (the rows so far kept) at about the time it names; None when it fits."""
+    if est["bytes"] <= est["limit"]:
+        return None
+    t_stop = duration * est["limit"] / est["bytes"]
+    return (f"the recording would take ~{fmt_bytes(est['bytes'])} ({est['rows']:.4g} rows at sim.record_rate = "
+            f"{est['record_rate']:.4g} Hz x {est['columns']} signal columns), over the memory limit "
+            f"{fmt_bytes(est['limit'])} (half the physical memory, or SNAKESIM_MEMORY_LIMIT): the run would stop "
+            f"there (failure memory_limit) at about t = {t_stop:.3g} s of {duration:g} s; set sim.record_rate to "
+            f"at most {est['fit_rate']:g} Hz, record fewer ports or shorten the duration")

@@ -156,3 +156,24 @@ def check_writable_file(path, option: str) -> Path:
         raise SnakesimError(f"{option} {path}: cannot write there ({_why(e)}); name a file in a folder you can "
                             "write to") from None
     return path
+
+
+def check_writable_dir(path, option: str) -> Path:
+    """``path`` is (or is made) a folder this process can write into (a probe file written and removed),
+    whatever it holds already (a campaign folder is resumed); an error naming the option, the folder and
+    the reason if not. Unlike :func:`prepare_out_dir` it neither claims the folder nor refuses one with
+    files in it."""
+    path = Path(path)
+    if path.exists() and not path.is_dir():
+        raise SnakesimError(f"{option} {path}: exists and is not a folder; name a folder")
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+        _probe(path)
+    except OSError as e:
+        try:
+            (path / f".snakesim-write-test-{os.getpid()}").unlink(missing_ok=True)   # a probe a full disk cut
+        except OSError:
+            pass
+        raise SnakesimError(f"{option} {path}: cannot write there ({_why(e)}); name a folder you can "
+                            "write to") from None
+    return path

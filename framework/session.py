@@ -6,15 +6,18 @@ import datetime
 import json
 from pathlib import Path
 
+from pydantic import ValidationError
+
 from .assembly import Resolved, resolve
 from .errors import ConfigError, SnakesimError
 from .builder import Builder
 from .plan import Plan
 from .registry import Registry, default_registry
 from .run_reports import add_reports
+from .validation_errors import config_error
 from .run_files import in_progress_summary, prepare_out_dir, release_out_dir
 from .simulator import RunResult, Simulator, write_run
-from .warm_up import warm_up
+from .warm_up import close_after_run, open_before_run, warm_up
 from .yaml_source import dump_yaml
 
 
@@ -26,6 +29,9 @@ def make_integrator(spec, registry: Registry):
         raise ConfigError(str(e), None, "sim.integrator.name") from None
     try:
         return cls(spec.params)
+    except ValidationError as e:       # one line naming the key, the value and what is valid
+        err = config_error(e, getattr(cls, "Params", None), key_prefix="sim.integrator.params")
+        raise ConfigError(f"integrator '{spec.name}': {err.detail}", err.where, err.key) from None
     except Exception as e:
         raise ConfigError(f"bad parameters for integrator '{spec.name}': {e}", None, "sim.integrator.params") from None
 
@@ -83,6 +89,7 @@ class Session:
                 release_out_dir(out_dir)
                 raise SnakesimError(f"could not write the run to {out_dir}: {e}") from None
         try:
+            open_before_run(self.plan, sim.t0)
             result = self.simulator.run(sim.duration, t0=sim.t0, progress=progress,
                                         realtime=sim.realtime if realtime is None else realtime, out_dir=out_dir)
             if self.interrupted is not None:
@@ -91,6 +98,7 @@ class Session:
             if out_dir is not None:
                 write_run(Path(out_dir), result, self.config_text())
         finally:
+            close_after_run(self.plan)
             if out_dir is not None:
                 release_out_dir(out_dir)
         return result

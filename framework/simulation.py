@@ -30,7 +30,7 @@ from .limits import step_count
 from .recorder import Recorder
 from .run_reports import add_reports
 from .simulator import Run, RunResult, Simulator
-from .warm_up import warm_up
+from .warm_up import close_after_run, open_before_run, warm_up
 from .wiring import PortRef
 
 
@@ -96,6 +96,7 @@ class Simulation:
         outputs at t0 computed and recorded."""
         if self._run is not None and not self._run.ended:
             self._run.finish()
+            close_after_run(self.plan)
         for ref, v in self._inputs0.items():
             buf = self.plan.open_inputs[ref]
             if isinstance(buf, Cell):
@@ -103,6 +104,7 @@ class Simulation:
             else:
                 np.copyto(buf, v)
         log = Recorder(self.plan.record_refs, self.plan, None, self.settings.duration)
+        open_before_run(self.plan, self.t0)
         self._run = self.simulator.start(log, self.t0, realtime=self.settings.realtime)
         self._run.advance(0)
         return self
@@ -134,6 +136,7 @@ class Simulation:
         elif k > self._run.k:
             self._run.advance(k)
             if self._run.ended:
+                close_after_run(self.plan)
                 add_reports(self.plan, self._run.result.summary)
         return self.summary
 
@@ -142,6 +145,7 @@ class Simulation:
         gives it; :meth:`reset` starts another."""
         if not self._run.ended:
             self._run.finish()
+            close_after_run(self.plan)
             add_reports(self.plan, self._run.result.summary)
         return self._run.result
 

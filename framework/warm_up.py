@@ -10,6 +10,12 @@ continuous closure is evaluated (plan.f), never a sink, a discrete update, a gat
 output leaves the process and no component's discrete state moves; whatever a component caches from it
 is checked against its inputs as on any evaluation. Best effort: an error here is left for the run to
 meet and report.
+
+The same goes for connections and files a component would open at its first step (a DDS participant
+and its endpoints take ~0.1 s each to open): ``open_before_run`` calls every component's ``before_run``
+just before the timed loop of a run (never at build: ``snakesim check`` opens nothing), and
+``close_after_run`` every ``after_run`` once the run has ended (an MCAP file complete when ``run``
+returns, not when the process exits).
 """
 
 from __future__ import annotations
@@ -40,3 +46,22 @@ def warm_up(plan, integrator, t0: float) -> None:
         np.copyto(plan.XD, XD0)
         for k, v in before.items():  # a stop asked for during the throwaway step is not the run's
             setattr(flag, k, v)
+
+
+def open_before_run(plan, t0: float) -> None:
+    """Every component's :meth:`~.component.Component.before_run` (with its inputs and ``u.cache``)."""
+    for name, comp in plan.components.items():
+        comp.before_run(t0, plan.io[name][1])
+
+
+def close_after_run(plan) -> None:
+    """Every component's :meth:`~.component.Component.after_run`, each tried even if one fails (the first
+    error is raised after all were called)."""
+    first = None
+    for name, comp in plan.components.items():
+        try:
+            comp.after_run(plan.io[name][1])
+        except Exception as e:      # noqa: BLE001 - the others still close; the first error is the run's
+            first = first or e
+    if first is not None:
+        raise first

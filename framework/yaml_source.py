@@ -176,22 +176,29 @@ def _unreadable(e, text: str, source: str) -> ConfigError:
                        "(control characters: a binary file?)", f"{source}:{line}")
 
 
-def load_yaml(path: str | Path):
+def read_text(path: str | Path, kind: str = "a YAML file") -> str:
+    """The UTF-8 text of a file a user gives (``kind`` says what it should be, for the messages):
+    a missing file, a folder, an unreadable or a binary/otherwise encoded one is a ConfigError naming
+    the file (and, for bad bytes, the first one and its offset). Every text input reads through this."""
     path = Path(path)
     try:
         raw = path.read_bytes()
     except FileNotFoundError:
         raise ConfigError("file not found", str(path)) from None
     except IsADirectoryError:
-        raise ConfigError("is a folder, expected a YAML file", str(path)) from None
+        raise ConfigError(f"is a folder, expected {kind}", str(path)) from None
     except OSError as e:
         raise ConfigError(f"cannot read the file: {e.strerror or e}", str(path)) from None
     try:
-        text = raw.decode("utf-8")
+        return raw.decode("utf-8")
     except UnicodeDecodeError as e:
         raise ConfigError(f"not UTF-8 text: byte 0x{raw[e.start]:02x} at byte offset {e.start} ({e.reason}); "
-                          "a YAML file is UTF-8 text (a binary file?)", str(path)) from None
-    data = load_yaml_text(text, str(path))
+                          f"{kind} is UTF-8 text (a binary file?)", str(path)) from None
+
+
+def load_yaml(path: str | Path):
+    path = Path(path)
+    data = load_yaml_text(read_text(path, "a YAML file"), str(path))
     return LocatedDict() if data is None else data
 
 

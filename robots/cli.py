@@ -15,32 +15,48 @@ from pathlib import Path
 
 import click
 
+from snakesim.framework.errors import SnakesimError
+
 #: how the generator names a mesh (urdf/ and meshes/ siblings) and how the written file names it
 GENERATED_MESH_DIR, WRITTEN_MESH_DIR = "../meshes/", "meshes/"
 
 
 def write_urdf(design: str, modules: int | None, head: bool | None, path: Path) -> tuple[Path, list[Path]]:
     """Write ``design`` with ``modules`` modules to ``path`` and its screw meshes to ``path.parent/meshes``;
-    returns (the URDF, the meshes). ValueError/KeyError name a bad design or module count."""
+    returns (the URDF, the meshes). ValueError/KeyError name a bad design or module count.
+
+    The meshes (and a plugin design's sidecar) are written first, the URDF last, each whole or not at all
+    (framework/output_files.py); when any of them cannot be written (a full or read-only disk) what this
+    call created is removed again and an OutputError names the file and the cause: no URDF is ever left
+    naming meshes that are not there."""
+    from snakesim.framework.output_files import OutputSet
+
     from .designs import DESIGNS
     from .registration import robot_design
-    from .screw_mesh import write_screw_mesh
+    from .screw_mesh import screw_mesh_bytes
 
     robot = robot_design(design).describe(modules, head)
-    path.parent.mkdir(parents=True, exist_ok=True)
+    path = Path(path)
     text = robot.urdf.replace(f'filename="{GENERATED_MESH_DIR}', f'filename="{WRITTEN_MESH_DIR}')
-    path.write_text(text, encoding="utf-8")
-    if design not in DESIGNS and robot.metadata:
-        # a plugin's design: its metadata sidecar beside the URDF, so `--urdf FILE` alone finds it
-        import yaml
-
-        stem = path.name[: -len(path.suffix)] if path.suffix else path.name
-        path.with_name(stem + ".snakesim.yaml").write_text(
-            yaml.safe_dump(dict(robot.metadata), sort_keys=False), encoding="utf-8")
     mesh_dir = path.parent / WRITTEN_MESH_DIR
-    if robot.screw_meshes:
-        mesh_dir.mkdir(exist_ok=True)
-    meshes = [write_screw_mesh(mesh_dir, g) for g in robot.screw_meshes.values()]
+    with OutputSet() as out:
+        out.make_dir(path.parent)
+        meshes = []
+        if robot.screw_meshes:
+            out.make_dir(mesh_dir)
+            for g in robot.screw_meshes.values():
+                name, data = screw_mesh_bytes(g)
+                target = mesh_dir / name
+                if not (target.is_file() and target.stat().st_size == len(data) and target.read_bytes() == data):
+                    out.write(target, data)         # the same mesh already there (same name): kept as is
+                meshes.append(target)
+        if design not in DESIGNS and robot.metadata:
+            # a plugin's design: its metadata sidecar beside the URDF, so `--urdf FILE` alone finds it
+            import yaml
+
+            stem = path.name[: -len(path.suffix)] if path.suffix else path.name
+            out.write(path.with_name(stem + ".snakesim.yaml"), yaml.safe_dump(dict(robot.metadata), sort_keys=False))
+        out.write(path, text)                       # last: what the files above serve
     return path, meshes
 
 
@@ -62,5 +78,7 @@ def urdf_command(design, modules, head, output):
         path, meshes = write_urdf(design, modules, head, output)
     except (KeyError, ValueError) as e:
         raise click.ClickException(str(e.args[0]) if e.args else str(e)) from None
+    except SnakesimError as e:      # a full or read-only disk: the file and the cause, nothing partial left
+        raise click.ClickException(f"robot urdf -o {output}: {e}") from None
     where = f" and {len(meshes)} screw mesh(es) in {path.parent / WRITTEN_MESH_DIR}" if meshes else ""
     click.echo(f"wrote {path}{where}", err=True)

@@ -95,8 +95,8 @@ def blade_volume(geometry: ScrewGeometry) -> float:
     return g.starts * g.blade_thickness * (g.outer_radius**2 - g.core_radius**2) / 2.0 * sweep
 
 
-def write_binary_stl(path: Path, triangles: np.ndarray, header: str = "") -> None:
-    """Write triangles (T, 3, 3) as a binary STL with per-facet normals."""
+def binary_stl_bytes(triangles: np.ndarray, header: str = "") -> bytes:
+    """Triangles (T, 3, 3) as a binary STL with per-facet normals."""
     tri = np.asarray(triangles, dtype=np.float64)
     normals = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
     norms = np.linalg.norm(normals, axis=1, keepdims=True)
@@ -108,11 +108,20 @@ def write_binary_stl(path: Path, triangles: np.ndarray, header: str = "") -> Non
     # STL headers must not start with "solid", or readers take the file for ASCII STL.
     if head.startswith(b"solid"):
         head = b"x" + head[1:]
+    return head + np.uint32(len(tri)).tobytes() + records.tobytes()
+
+
+def write_binary_stl(path: Path, triangles: np.ndarray, header: str = "") -> None:
+    """Write triangles (T, 3, 3) as a binary STL with per-facet normals."""
     path.parent.mkdir(parents=True, exist_ok=True)
     with open(path, "wb") as f:
-        f.write(head)
-        f.write(np.uint32(len(tri)).tobytes())
-        f.write(records.tobytes())
+        f.write(binary_stl_bytes(triangles, header))
+
+
+def screw_mesh_bytes(geometry: "ScrewGeometry") -> tuple[str, bytes]:
+    """(file name, binary STL) of the screw mesh, as :func:`write_screw_mesh` writes it."""
+    q = geometry.quantized()
+    return q.filename(), binary_stl_bytes(screw_triangles(q), header=f"snakesim EELS screw {q.filename()}")
 
 
 def write_screw_mesh(directory: Path, geometry: ScrewGeometry) -> Path:

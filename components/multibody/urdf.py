@@ -40,6 +40,34 @@ class MultibodyModelError(ValueError):
     names the source, the element and what would be valid."""
 
 
+#: the mesh files a URDF's <mesh filename> may name (read with trimesh)
+MESH_FORMATS = (".stl", ".obj", ".ply", ".off", ".glb", ".gltf")
+
+
+def load_mesh_file(path: Path, where: str, filename: str | None = None):
+    """The trimesh of a URDF ``<mesh>`` file, for every reader (collision hulls, the viewer): a file that is
+    not a readable triangle mesh raises :class:`MultibodyModelError` naming ``where`` (the URDF, link and
+    element), the file and the mesh formats that are valid, never trimesh's own exception."""
+    import trimesh
+
+    path = Path(path)
+    name = f"'{filename}' ({path})" if filename and filename != str(path) else f"'{path}'"
+    valid = f"valid: a triangle mesh file ({', '.join(MESH_FORMATS)})"
+    if path.suffix.lower() not in MESH_FORMATS:
+        raise MultibodyModelError(f"{where}: mesh {name} is not a mesh file (type "
+                                  f"'{path.suffix or 'none'}'); {valid}")
+    try:
+        mesh = trimesh.load(path, force="mesh")
+    except Exception as e:          # trimesh fails on a non-mesh in many ways (NotImplementedError, a missing codec...)
+        # an ImportError is trimesh reaching for a text-encoding detector: the bytes are no mesh at all
+        why = "" if isinstance(e, ImportError) else f": {type(e).__name__}: {e}"
+        raise MultibodyModelError(f"{where}: mesh {name} cannot be read as {path.suffix.lower()[1:].upper()} "
+                                  f"(a binary or corrupt file?{why}); {valid}") from None
+    if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
+        raise MultibodyModelError(f"{where}: mesh {name} holds no triangles; {valid}")
+    return mesh
+
+
 def rpy_matrix(rpy) -> np.ndarray:
     r, p, y = (float(a) for a in rpy)
     cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)

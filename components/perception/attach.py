@@ -94,8 +94,10 @@ def parse_size(text: str) -> tuple[int, int]:
 def attach_stereo(resolved: Resolved, size: str, registry=None) -> None:
     try:
         w, h = parse_size(size)
+        from .camera import check_camera_size
+        check_camera_size(w, h, views=2)        # refused with the estimate before anything is built
     except ValueError as e:
-        raise ConfigError(f"--stereo: {e}", "--stereo") from None
+        raise ConfigError(str(e), "--stereo") from None
     scene = _scene(resolved, registry)
     params = {"link": "camera_left", "width": w, "height": h, "baseline": 0.0675,
               "model": {"kind": "pinhole", "fov": 90.0}}

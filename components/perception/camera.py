@@ -48,6 +48,37 @@ from .hit_kernels import develop
 Vec3 = tuple[float, float, float]
 #: shadow rays start this far off the surface (m), so a surface does not shadow itself
 SHADOW_OFFSET = 1e-4
+#: bytes a camera holds a pixel whatever it renders: its rays (the model's, in cast order, contiguous
+#: copies: 2 x 48), indices (16), the binned bundle (~16) and the reused cast buffers (CastBuffers: ~190)
+RAY_BYTES_PER_PIXEL = 320
+
+
+def frame_bytes_per_pixel(color: bool) -> int:
+    """Bytes a rendered frame takes a pixel: image (grey float32, or RGB), range, depth, shadow mask."""
+    return (12 if color else 4) + 4 + 4 + 1
+
+
+def camera_memory_bytes(width: int, height: int, views: int = 1, color: bool = False) -> float:
+    """What a camera of ``width`` x ``height`` pixels allocates: ray and cast buffers once, a frame per view."""
+    return float(width) * float(height) * (RAY_BYTES_PER_PIXEL + views * frame_bytes_per_pixel(color))
+
+
+def check_camera_size(width: int, height: int, views: int = 1, color: bool = False) -> None:
+    """A ValueError with the estimate and the largest size at this aspect ratio that fits, before anything is
+    allocated, when the camera would pass the memory limit (framework/limits.py)."""
+    from snakesim.framework.limits import fmt_bytes, memory_limit_bytes
+
+    need, limit = camera_memory_bytes(width, height, views, color), memory_limit_bytes()
+    if need <= limit:
+        return
+    per_px = need / (float(width) * float(height))
+    scale = (limit / need) ** 0.5
+    fit_w, fit_h = max(1, int(width * scale)), max(1, int(height * scale))
+    raise ValueError(f"{width}x{height} pixels would take ~{fmt_bytes(need)} ({per_px:.0f} B a pixel: the rays and "
+                     f"cast buffers {RAY_BYTES_PER_PIXEL} B, and {views} frame(s) of "
+                     f"{frame_bytes_per_pixel(color)} B), over the memory limit {fmt_bytes(limit)} (half the "
+                     f"physical memory, or SNAKESIM_MEMORY_LIMIT); at most ~{int(limit // per_px)} pixels fit, "
+                     f"e.g. {fit_w}x{fit_h}")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -126,6 +157,10 @@ class _Camera(Component):
                              "in the assembly (e.g. rate: 5)")
         if not p.near < p.max_range:
             raise ValueError(f"{self.name}: near = {p.near:g} m must be below max_range = {p.max_range:g} m")
+        try:        # before any pixel is allocated
+            check_camera_size(p.width, p.height, 2 if isinstance(self, StereoCamera) else 1, p.color)
+        except ValueError as e:
+            raise ValueError(f"{self.name}: {e}") from None
         self.model = camera_model_from_spec(p.model, p.width, p.height, where=f"{self.name}: model")
         o, d = self.model.pixel_rays()
         o, d = o.reshape(-1, 3), d.reshape(-1, 3)

@@ -146,7 +146,13 @@ def _mesh_file(filename: str, base_dir: Path, screws: dict, link: str):
             name = name[len(prefix):]
     path = Path(name) if Path(name).is_absolute() else base_dir / name
     if path.is_file():
-        return trimesh.load(path, force="mesh")
+        from snakesim.components.multibody.urdf import MultibodyModelError, load_mesh_file
+
+        try:
+            return load_mesh_file(path, f"snakesim viz: link '{link}' <visual>", filename)
+        except MultibodyModelError as e:      # the viewer shows the robot without it, saying why
+            sys.stderr.write(f"{e}; shown without it\n")
+            return None
     geometry = screws.get(Path(name).name)
     if geometry is not None:
         from snakesim.robots.screw_mesh import screw_triangles

@@ -40,7 +40,7 @@ from pathlib import Path
 import numpy as np
 
 from snakesim.components.multibody.robot_model import RobotModel
-from snakesim.components.multibody.urdf import MultibodyModelError, rpy_matrix
+from snakesim.components.multibody.urdf import MultibodyModelError, load_mesh_file, rpy_matrix
 
 from .decompose import screw_mesh, slab_hulls, to_coal_convex
 
@@ -89,8 +89,6 @@ def _blade_hulls(geometry, n):
 
 def _mesh(el, where, base_dir, screw_meshes):
     """trimesh of a <mesh> collision element: the file (relative to base_dir), else a generated screw mesh."""
-    import trimesh
-
     fname = el.get("filename", "")
     name = fname
     for prefix in ("package://", "file://"):
@@ -98,7 +96,7 @@ def _mesh(el, where, base_dir, screw_meshes):
     path = Path(name)
     path = path if path.is_absolute() else base_dir / path
     if path.is_file():
-        return trimesh.load(path, force="mesh")
+        return load_mesh_file(path, where, fname)
     geometry = screw_meshes.get(Path(name).name)
     if geometry is not None:
         return screw_mesh(geometry)
