@@ -35,6 +35,7 @@ def builtin_components() -> tuple:
     from .signals.sources import Constant, Sine, Step
     from .sensors import ForceTorqueSensors, Imu
     from .sensors.fts_wall_loads import FtsWallLoads
+    from .sensors.odometry import Odometry
     from .tethers import Tethers, WrenchSum
     from .viz import RerunSink
     from .ros2 import Ros2Commands, Ros2Publisher, Ros2SensorBridge, Ros2SimControl, Ros2TetherCommands
@@ -42,13 +43,14 @@ def builtin_components() -> tuple:
     from .ros2.sensor_mcap import Ros2SensorMcap
     from .ros2.gait_commands import Ros2GaitCommands
     from .ros2.brace_commands import Ros2BraceCommands
+    from .ros2.odometry_attach import Ros2Odometry, Ros2OdometryMcap
 
     return (Constant, Step, Sine, Gain, Sum, ZeroOrderHold, Pendulum, ViscousDamper, PointMass, SpringDamper,
             PointContact, HullContact, TerrainSource, Multibody, ScrewSdfContact, BodyContact, ScrewDrive,
             JointPid, JointSpringDamper, JointSetpoints, SerpenoidGait, HelicalGait, CsvTrajectory, Schedule, ForceTorqueSensors, FtsWallLoads,
-            Imu, Tethers, WrenchSum, MobilityMonitor, VerticalMobilityEvaluation, TraverseEvaluation, TerrainClearance, JointLimits, BraceClimb, RerunSink, PlanarPose, ScrewSchedule, Ros2Publisher,
+            Imu, Odometry, Tethers, WrenchSum, MobilityMonitor, VerticalMobilityEvaluation, TraverseEvaluation, TerrainClearance, JointLimits, BraceClimb, RerunSink, PlanarPose, ScrewSchedule, Ros2Publisher,
             Ros2Commands, Ros2SensorBridge, Ros2SimControl, Ros2McapRecorder, Ros2SensorMcap, Ros2TetherCommands,
-            Ros2GaitCommands, Ros2BraceCommands, *PLACEMENT, *PERCEPTION)
+            Ros2GaitCommands, Ros2BraceCommands, Ros2Odometry, Ros2OdometryMcap, *PLACEMENT, *PERCEPTION)
 
 
 def __getattr__(name):
@@ -67,6 +69,8 @@ def snakesim_add_commands(cli):
                                  "Fit mu and ||e_v|| from screw drag tests; write a materials file."))
     cli.add_command(lazy_command("robot", "snakesim.robots.cli:robot",
                                  "Robot descriptions: write a design's URDF for N modules, with its meshes."))
+    cli.add_command(lazy_command("mcap", "snakesim.components.ros2.mcap_cli:mcap",
+                                 "MCAP recordings (--ros2-mcap): recover a killed run's file."))
 
 
 @hookimpl

@@ -31,7 +31,8 @@ multibody (class Multibody) its name is the gate's ``robot_state`` and the gate 
 The sensor bridge (``ros2_sensor_bridge``, :func:`attach_sensor_bridge`), added when the scene has
 perception sensors: every output of port role LIDAR_SCAN or CAMERA_FRAME, one topic base each
 (/comp, or /comp/port when the component has several such ports: a stereo pair's left and right),
-at the fastest of those sensors' rates.
+at the fastest of those sensors' rates. When the run records to MCAP (``--ros2-mcap``), the bridge
+is mirrored into the recording (``ros2_sensor_mcap``), whenever it is added.
 
 The tether command source (``ros2_tether_commands``, :func:`attach_tether_commands`), added when the
 scene has a ``tethers`` component (class Tethers) whose ``attached`` input it leaves unconnected:
@@ -55,6 +56,8 @@ from __future__ import annotations
 import logging
 
 from snakesim.framework.assembly import ComponentSpec, Resolved
+
+from .odometry_attach import attach_odometry
 from snakesim.framework.rates import nearest_period
 
 from snakesim.components.port_roles import (IMU_ANGULAR_RATE, IMU_ORIENTATION, IMU_SPECIFIC_FORCE, JOINT_EFFORTS,
@@ -97,6 +100,7 @@ def attach_ros2(resolved: Resolved, registry=None, params: dict | None = None) -
     attach_gait_commands(resolved, registry, both)
     attach_brace_commands(resolved, registry, both)
     attach_sensor_bridge(resolved, registry, both)
+    attach_odometry(resolved, registry, {**both, "world_frame": pub.get("world_frame", "world")})
     attach_sim_control(resolved, {**both, "world_frame": pub.get("world_frame", "world")}, registry)
     return name
 
@@ -236,8 +240,11 @@ def attach_sensor_bridge(resolved: Resolved, registry=None, params: dict | None 
     from snakesim.components.port_roles import CAMERA_FRAME, LIDAR_SCAN
     from snakesim.framework.registry import default_registry
 
+    from .mcap_recorder import sync_sensor_recorder
+
     existing = _update_existing(resolved, SENSOR_BRIDGE, params)
     if existing is not None:
+        sync_sensor_recorder(resolved, existing)          # a --ros2-mcap recording gets what the wire gets
         return existing
     refs, bases, rates = [], [], []
     for comp, spec, cls in (registry or default_registry()).classes_in(resolved):
@@ -252,10 +259,15 @@ def attach_sensor_bridge(resolved: Resolved, registry=None, params: dict | None 
     name = _free_name(resolved, SENSOR_BRIDGE)
     fastest = max(rates, default=COMMANDS_RATE)
     rate = 1.0 / (nearest_period(fastest, resolved.sim.dt) * resolved.sim.dt)
-    resolved.components[name] = ComponentSpec(type=SENSOR_BRIDGE, rate=rate,
-                                              params={**(params or {}), "sensors": refs, "bases": bases})
+    from .sensor_frames import sensor_mounts        # where each sensor frame hangs in the tf tree
+
+    mounts, robot = sensor_mounts(resolved, registry or default_registry())
+    resolved.components[name] = ComponentSpec(type=SENSOR_BRIDGE, rate=rate, uses={"robot": robot} if robot else {},
+                                              params={**(params or {}), "sensors": refs, "bases": bases,
+                                                      "mounts": mounts})
     resolved.connections.extend((ref, f"{name}.sensor{i}", "--ros2") for i, ref in enumerate(refs))
     resolved.where[name] = "--ros2"
+    sync_sensor_recorder(resolved, name)
     return name
 
 

@@ -18,6 +18,7 @@ class CommandReaderRun:
     reader: object = None
     rejected: int = 0
     applied: int = 0
+    malformed_count: int = 0
     log: RejectionLog | None = None
     finalizer: object = None
 
@@ -27,10 +28,18 @@ class CommandReaderRun:
         from .transport import Ros2Participant
 
         dds = Ros2Participant(endpoint.domain_id, endpoint.interface)
-        self.reader = dds.reader(topic, msg_type)
+        self.reader = dds.reader(topic, msg_type, on_malformed=self.malformed)
         self.dds = dds
         endpoint.announce(dds, node)
         self.finalizer = weakref.finalize(self, dds.close)
+
+    def malformed(self, topic: str, reason: str) -> None:
+        """A sample the transport dropped as malformed (it logged it, naming topic and reason): counted with
+        the rejections (the source's ``rejected`` output shows it from its next rejection)."""
+        self.rejected += 1
+        self.malformed_count += 1
+        if hasattr(self, "last_reason"):
+            self.last_reason = f"{topic}: dropped a malformed sample: {reason}"
 
     def close(self) -> None:
         if self.finalizer is not None:

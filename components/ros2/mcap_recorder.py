@@ -16,12 +16,17 @@ published. With perception sensors in the scene, ``--ros2-mcap`` also adds a
 ``ros2_sensor_mcap`` (.sensor_mcap) that writes the sensor bridge's topics
 (PointCloud2, Image, CameraInfo, the sensor frames on /tf) into the same file.
 
-An interrupted run leaves a readable file: the writer flushes its chunk and
-the file every ``flush_period`` wall seconds (and the summary and footer are
-written when the component's run ends, or at interpreter exit); a file cut
-short (a killed process) lacks the summary and may end in a partial record:
-read it record by record (``mcap.reader.NonSeekingReader(f).iter_messages(log_time_order=False)``
-up to its ``EndOfFile``), or let ``mcap recover`` rewrite it whole.
+A killed run leaves its data on disk: chunks are small (``chunk_size``, 256 KiB by default) and
+each goes to the file, unbuffered, the moment it is finished; a chunk in progress is finished and
+written after at most ``flush_period`` wall seconds (1 s), by a flusher thread too, so a run held in
+lockstep or paused loses nothing it recorded before. What such a file lacks is its summary and
+footer (written when the recorders finish, or at interpreter exit), and it may end in a partial
+record: ``snakesim mcap recover FILE`` rewrites it whole (:mod:`.mcap_recover`, like ``ros2 bag
+reindex`` or the Go ``mcap recover``), or read it record by record with
+``mcap.reader.NonSeekingReader(f).iter_messages(log_time_order=False)`` up to its ``EndOfFile``.
+
+Every channel carries rosbag2's ``offered_qos_profiles`` metadata: the QoS the topic is offered
+with on the wire (:data:`.transport.QOS`, the sensor bridge's for its topics).
 
     rec: {type: ros2_mcap, rate: 100, params: {path: run.mcap, rates: {tf: 50}}}
     connections: [robot.joint_q -> rec.joint_positions, ...]   # as for ros2_publisher
@@ -30,6 +35,7 @@ up to its ``EndOfFile``), or let ``mcap recover`` rewrite it whole.
 from __future__ import annotations
 
 import dataclasses
+import threading
 import time
 import weakref
 from functools import lru_cache
@@ -40,12 +46,13 @@ from pydantic import Field
 from .publisher import PublisherRun, Ros2Publisher, Ros2PublisherParams
 
 PROFILE = "ros2"
+CHUNK_SIZE = 1 << 18          # bytes: small chunks, each on disk as soon as it is finished
 
 
 class Ros2McapParams(Ros2PublisherParams):
     path: str = Field(..., description="MCAP file to write (replaced if it exists)")
-    flush_period: float = Field(1.0, gt=0, description="wall s between chunk flushes (what a killed run loses)")
-    chunk_size: int = Field(1 << 20, gt=0, description="bytes per chunk before it is written (zstd compressed)")
+    flush_period: float = Field(1.0, gt=0, description="wall s at most between a message and its chunk on disk (what a killed run loses)")
+    chunk_size: int = Field(CHUNK_SIZE, gt=0, description="bytes per chunk before it is written (zstd compressed)")
 
 
 @lru_cache(maxsize=None)
@@ -67,8 +74,7 @@ class McapChannel:
 
     def write(self, buf) -> None:
         run = self.run
-        run.writer.add_message(self.channel_id, log_time=run.now_ns, data=bytes(buf), publish_time=run.now_ns,
-                               sequence=self.count)
+        run.dds.add(self.channel_id, run.now_ns, bytes(buf), self.count)
         self.count += 1
 
 
@@ -86,62 +92,132 @@ class McapMessageWriter:
         self.channel.write(raw.ljust((len(raw) + 3) & ~3, b"\0"))
 
 
+class _Unbuffered:
+    """The stream mcap's writer writes to: each write goes straight to the file (the writer writes
+    once per finished chunk, once for its message index), so what it finished is on disk, not in a
+    buffer a killed process takes with it."""
+
+    def __init__(self, path: Path):
+        self.raw = open(path, "wb", buffering=0)
+        self.pos = 0
+
+    def write(self, data) -> int:
+        view = memoryview(data)
+        while view:
+            n = self.raw.write(view)
+            view = view[n:]
+        self.pos += len(data)
+        return len(data)
+
+    def tell(self) -> int:
+        return self.pos
+
+    def flush(self) -> None:
+        pass
+
+    def close(self) -> None:
+        self.raw.close()
+
+
 class McapFile:
     """An MCAP file with ROS 2 schemas shared by the run's recorders (``ros2_mcap`` and
     ``ros2_sensor_mcap`` write one file): :meth:`shared` opens it (replacing an old file) for the
     first recorder of a path and hands the same writer to the others; each :meth:`release` s its
-    share and the last one finishes the file. One channel per topic, one schema per type."""
+    share and the last one finishes the file. One channel per topic, one schema per type.
+
+    Kept recoverable while it is written: a chunk is on disk once it holds ``chunk_size`` bytes, and
+    a chunk in progress is finished and written at the latest ``flush_period`` wall seconds after its
+    first message, by the thread that adds (:meth:`add`) or, when the run adds nothing (held,
+    paused, stuck), by a flusher thread. Writer calls take :attr:`lock`."""
 
     _open: dict[Path, "McapFile"] = {}
 
-    def __init__(self, path: Path, chunk_size: int):
+    def __init__(self, path: Path, chunk_size: int = CHUNK_SIZE, flush_period: float = 1.0):
         from mcap.writer import CompressionType, Writer
 
         path.parent.mkdir(parents=True, exist_ok=True)
         self.path = path
-        self.stream = open(path, "wb")
+        self.stream = _Unbuffered(path)
         self.writer = Writer(self.stream, chunk_size=chunk_size, compression=CompressionType.ZSTD)
         self.writer.start(profile=PROFILE, library="snakesim ros2_mcap")
         self.schemas: dict[str, int] = {}
         self.channels: dict[str, int] = {}
         self.users = 0
-        self.next_flush = 0.0
+        self.flush_period = flush_period
+        self.due = None                   # monotonic time by which the chunk in progress goes to disk
+        self.flushes = 0                  # timed flushes so far
         self.closed = False
+        self.lock = threading.Lock()
+        self._stop = threading.Event()
+        self._flusher = threading.Thread(target=self._flush_loop, name=f"mcap-flush {path.name}", daemon=True)
+        self._flusher.start()
 
     @classmethod
-    def shared(cls, path: Path, chunk_size: int) -> "McapFile":
+    def shared(cls, path: Path, chunk_size: int = CHUNK_SIZE, flush_period: float = 1.0) -> "McapFile":
         key = Path(path).resolve()
         f = cls._open.get(key)
         if f is None or f.closed:
-            f = cls._open[key] = cls(key, chunk_size)
+            f = cls._open[key] = cls(key, chunk_size, flush_period)
+        f.flush_period = min(f.flush_period, flush_period)
         f.users += 1
         return f
 
-    def channel(self, topic: str, ros_name: str, latched: bool = False) -> int:
+    def channel(self, topic: str, ros_name: str, qos=None) -> int:
+        """The channel of ``topic`` (registered on first use, with its schema and rosbag2's
+        offered_qos_profiles for ``qos``, default the topic's on the wire, :data:`.transport.QOS`)."""
         cid = self.channels.get(topic)
         if cid is not None:
             return cid
-        sid = self.schemas.get(ros_name)
-        if sid is None:
-            sid = self.schemas[ros_name] = self.writer.register_schema(
-                name=ros_name, encoding="ros2msg", data=schema_text(ros_name).encode())
-        meta = {"offered_qos_profiles": _qos_yaml(topic)} if latched or topic in ("/clock", "/tf") else {}
-        cid = self.channels[topic] = self.writer.register_channel(topic=topic, message_encoding="cdr",
-                                                                  schema_id=sid, metadata=meta)
+        with self.lock:
+            sid = self.schemas.get(ros_name)
+            if sid is None:
+                sid = self.schemas[ros_name] = self.writer.register_schema(
+                    name=ros_name, encoding="ros2msg", data=schema_text(ros_name).encode())
+            cid = self.channels[topic] = self.writer.register_channel(
+                topic=topic, message_encoding="cdr", schema_id=sid,
+                metadata={"offered_qos_profiles": qos_yaml(topic, qos)})
         return cid
 
-    def flush(self) -> None:
+    def add(self, channel_id: int, log_time: int, data: bytes, sequence: int = 0) -> None:
+        """One message (log and publish time ``log_time`` ns); writes the chunk when it is full or due."""
+        with self.lock:
+            self.writer.add_message(channel_id, log_time=log_time, data=data, publish_time=log_time,
+                                    sequence=sequence)
+            due = self.due
+            if due is None:
+                self.due = time.monotonic() + self.flush_period
+            elif time.monotonic() >= due:
+                self._flush()
+
+    def _flush(self) -> None:
         if not self.closed:
-            self.writer.flush()
+            self.writer.flush()               # the chunk in progress, finished, to the file
+            self.due = None
+            self.flushes += 1
+
+    def flush(self) -> None:
+        """Write the chunk in progress to the file now."""
+        with self.lock:
+            self._flush()
 
     def flush_every(self, period: float) -> None:
-        """Flush the chunk and the file when ``period`` wall seconds have passed since the last flush
-        (what a killed run loses)."""
-        now = time.monotonic()
-        if now >= self.next_flush:
-            if self.next_flush:
-                self.flush()
-            self.next_flush = now + period
+        """Write the chunk in progress when it is due (kept for callers; :meth:`add` and the flusher
+        thread do it)."""
+        due = self.due
+        if due is not None and time.monotonic() >= due:
+            self.flush()
+
+    def _flush_loop(self) -> None:
+        while True:
+            due = self.due
+            wait = self.flush_period if due is None else max(due - time.monotonic(), 0.0)
+            if self._stop.wait(wait):
+                return
+            due = self.due
+            if due is not None and time.monotonic() >= due:
+                with self.lock:
+                    if self.due is not None and time.monotonic() >= self.due:
+                        self._flush()
 
     def release(self) -> None:
         """One recorder is done with the file; the last one writes the summary and footer."""
@@ -150,24 +226,34 @@ class McapFile:
             self.close()
 
     def close(self) -> None:
-        if not self.closed:
-            self.closed = True
-            self.writer.finish()
-            self.stream.close()
-            if McapFile._open.get(self.path) is self:
-                del McapFile._open[self.path]
+        if self.closed:
+            return
+        self._stop.set()
+        with self.lock:
+            if not self.closed:
+                self.closed = True
+                self.writer.finish()
+                self.stream.close()
+        if self._flusher is not threading.current_thread():
+            self._flusher.join(timeout=1.0)
+        if McapFile._open.get(self.path) is self:
+            del McapFile._open[self.path]
 
 
-def _qos_yaml(topic: str) -> str:
-    """rosbag2's offered_qos_profiles metadata for the topics whose QoS is not the default."""
+def qos_yaml(topic: str, qos=None) -> str:
+    """rosbag2's offered_qos_profiles metadata (Humble's layout) for ``qos``, default the QoS
+    ``topic`` is offered with on the wire."""
     from .transport import DEFAULT_QOS, QOS
 
-    q = QOS.get(topic, DEFAULT_QOS)
+    q = qos or QOS.get(topic, DEFAULT_QOS)
     return (f"- history: 1\n  depth: {q.depth}\n  reliability: {1 if q.reliable else 2}\n"
             f"  durability: {1 if q.transient_local else 2}\n  deadline:\n    sec: 2147483647\n"
             f"    nsec: 4294967295\n  lifespan:\n    sec: 2147483647\n    nsec: 4294967295\n"
             f"  liveliness: 1\n  liveliness_lease_duration:\n    sec: 2147483647\n    nsec: 4294967295\n"
             f"  avoid_ros_namespace_conventions: false")
+
+
+_qos_yaml = qos_yaml
 
 
 class Ros2McapRecorder(Ros2Publisher):
@@ -179,9 +265,15 @@ class Ros2McapRecorder(Ros2Publisher):
     def make_cache(self, x, u, y) -> "McapRun":
         return McapRun(templates=self._make_templates(), published=dict.fromkeys(self.topic_rates, 0))
 
+    def before_run(self, t0, u):
+        """The file and its latched messages, opened before the clock starts, stamped at t0."""
+        u.cache.now_ns = int(t0 * 1e9 + 0.5) if t0 > 0 else 0
+        super().before_run(t0, u)
+
     def _open(self, run: "McapRun", u) -> None:
         p = self.p
-        f = McapFile.shared(Path(p.path), p.chunk_size)
+        f = run.dds = McapFile.shared(Path(p.path), p.chunk_size, p.flush_period)
+        run.finalizer = weakref.finalize(run, f.release)     # also at interpreter exit
         run.writer = f.writer
         writers = {}
         for key, entry in run.templates.items():
@@ -192,12 +284,12 @@ class Ros2McapRecorder(Ros2Publisher):
         if p.robot_description and self.robot is not None:
             from . import messages as M
 
-            cid = f.channel("/robot_description", M.String.ros_name, latched=True)
-            McapMessageWriter(McapChannel(run, cid)).write(M.String(data=self.robot.urdf))
+            cid = f.channel("/robot_description", M.String.ros_name)
+            McapMessageWriter(McapChannel(run, cid)).write(M.String(data=self.description_text()))
         if self.static:
             from . import messages as M
 
-            cid = f.channel("/tf_static", M.TFMessage.ros_name, latched=True)
+            cid = f.channel("/tf_static", M.TFMessage.ros_name)
             McapMessageWriter(McapChannel(run, cid)).write(self.static_message(run.now_ns * 1e-9))
         if self.rtf_period:
             from . import messages as M
@@ -206,9 +298,6 @@ class Ros2McapRecorder(Ros2Publisher):
             cid = f.channel(RTF_TOPIC, M.Float64.ros_name)
             run.rtf = (self.rtf_period, McapMessageWriter(McapChannel(run, cid)), M.Float64)
         self._schedule(run, writers, u)
-        run.dds = f
-        f.flush_every(p.flush_period)
-        run.finalizer = weakref.finalize(run, f.release)     # also at interpreter exit
 
     def update(self, t, xd, u):
         run = u.cache
@@ -216,7 +305,6 @@ class Ros2McapRecorder(Ros2Publisher):
         if run.dds is None:
             self._open(run, u)
         super().update(t, xd, u)
-        run.dds.flush_every(self.p.flush_period)
 
 
 @dataclasses.dataclass(eq=False)
@@ -237,14 +325,17 @@ _DDS_ONLY = ("domain_id", "interface", "node_graph", "ros_distro")
 def attach_mcap(resolved, path: str) -> str:
     """Add (or update) a ``ros2_mcap`` sink mirroring the ``--ros2`` publisher (added if missing): its params,
     rate, uses and connections, plus ``path``; and, when the scene has perception sensors, a
-    ``ros2_sensor_mcap`` mirroring the sensor bridge into the same file. The publisher recorder's name."""
+    ``ros2_sensor_mcap`` mirroring the sensor bridge into the same file (the bridge, when added later,
+    mirrors itself: :func:`sync_sensor_recorder`). What is on the wire is in the file, whichever
+    ``--ros2*`` options come with ``--ros2-mcap``. The publisher recorder's name."""
     from .attach import SENSOR_BRIDGE, attach_ros2
 
-    pub = attach_ros2(resolved)
-    name = _mirror(resolved, pub, MCAP, path)
+    name = _mirror(resolved, attach_ros2(resolved), MCAP, path)
     bridge = next((n for n, s in resolved.components.items() if s.type == SENSOR_BRIDGE), None)
     if bridge is not None:
         _mirror(resolved, bridge, SENSOR_MCAP, path)
+    from .odometry_attach import attach_odometry_mcap
+    attach_odometry_mcap(resolved, path)
     return name
 
 
@@ -253,6 +344,14 @@ def sync_recorder(resolved, pub: str) -> None:
     name = _recorder(resolved, MCAP)
     if name is not None:
         _mirror(resolved, pub, MCAP, resolved.components[name].params["path"])
+
+
+def sync_sensor_recorder(resolved, bridge: str) -> None:
+    """When the run records to MCAP (``--ros2-mcap``), make its ``ros2_sensor_mcap`` mirror sensor bridge
+    ``bridge`` (added if missing, into the publisher recorder's file)."""
+    name = _recorder(resolved, MCAP)
+    if name is not None:
+        _mirror(resolved, bridge, SENSOR_MCAP, resolved.components[name].params["path"])
 
 
 def _recorder(resolved, type_name: str) -> str | None:

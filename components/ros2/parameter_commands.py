@@ -32,7 +32,7 @@ from snakesim.framework import Component, Output
 
 from .command_reader import CommandReaderRun
 from .rejections import Rejected, RejectionLog
-from .transport import DdsEndpoint
+from .transport import ClosedAfterRun, DdsEndpoint
 
 DOUBLE, INTEGER = 3, 2          # rcl_interfaces/ParameterType
 EVENT = "rcl_interfaces/msg/ParameterEvent"
@@ -70,7 +70,7 @@ class ParameterCommandsParams(DdsEndpoint):
     pass
 
 
-class ParameterCommands(Component[ParameterCommandsParams]):
+class ParameterCommands(ClosedAfterRun, Component[ParameterCommandsParams]):
     """Base of the ParameterEvent command sources (module docstring); not registered itself."""
 
     TOPIC: str = ""

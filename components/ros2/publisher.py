@@ -23,10 +23,12 @@ Topics (QoS: :mod:`.transport`; types: :mod:`.messages`):
                                                    once, transient local (latched), stamped at the first tick
     /sim/real_time_factor  std_msgs/Float64        sim s per wall s over the last window (rates.real_time_factor,
                                                    default 1 Hz; from the second window on)
-    /robot_description  std_msgs/String            robot.urdf, once, transient local (latched)
-    /imu                sensor_msgs/Imu            when params.imu_frame: frame_id that link, covariances
-                                                   diag(imu_gyro_noise²), diag(imu_accel_noise²), orientation
-                                                   covariance 0 (exact)
+    /robot_description  std_msgs/String            robot.urdf with its meshes as file:// URIs (or package://
+                                                   params.mesh_package/..., :mod:`.robot_description`), once,
+                                                   transient local (latched)
+    /imu                sensor_msgs/Imu            when params.imu_frame: frame_id that link; covariances from
+                                                   the IMU's noise (:func:`imu_covariances`): diag σ² per axis,
+                                                   element 0 = -1 for a quantity not wired
     /fts/<cut joint>    geometry_msgs/WrenchStamped  one per sensor of params.wrench_cuts (frame_id: its link)
     ros_discovery_info  rmw_dds_common/ParticipantEntitiesInfo  node /snakesim with these writers, latched
                                                    (params.node_graph, ros_distro: :mod:`.node_graph`)
@@ -60,12 +62,33 @@ from snakesim.framework import Component, Input, Uses
 from snakesim.framework.rates import period_of
 
 from .template import CdrTemplate, RawWriter
-from .transport import DdsEndpoint
+from .transport import ClosedAfterRun, DdsEndpoint
 
 TOPICS = ("clock", "joint_states", "tf", "imu", "wrench", "real_time_factor")
 RTF_TOPIC = "/sim/real_time_factor"
 RTF_RATE = 1.0          # Hz, default rate of /sim/real_time_factor
 DEFAULT_RATES = {"clock": 100.0, "joint_states": 100.0, "tf": 50.0, "imu": 100.0, "wrench": 100.0}
+#: sensor_msgs/Imu's three measured quantities, in message order
+IMU_QUANTITIES = ("orientation", "angular_velocity", "linear_acceleration")
+#: variance published for a quantity measured without noise (σ = 0): an all-zero covariance means
+#: "unknown" to ROS (sensor_msgs/Imu), so an exact one is given as this (σ = 1e-6 in its units)
+EXACT_VARIANCE = 1e-12
+
+
+def imu_covariances(orientation: float, angular_velocity: float, linear_acceleration: float,
+                    provides=IMU_QUANTITIES) -> dict[str, list[float]]:
+    """sensor_msgs/Imu's three row-major 3×3 covariances from per-axis standard deviations (rad, rad/s,
+    m/s²): diag(σ², σ², σ²) (EXACT_VARIANCE where σ = 0, since zeros mean "unknown"); a quantity not in
+    ``provides`` gets -1 in element 0 and zeros elsewhere, as the message definition asks."""
+    out = {}
+    for key, sigma in zip(IMU_QUANTITIES, (orientation, angular_velocity, linear_acceleration)):
+        cov = [0.0] * 9
+        if key in provides:
+            cov[0] = cov[4] = cov[8] = float(sigma) ** 2 if sigma > 0 else EXACT_VARIANCE
+        else:
+            cov[0] = -1.0
+        out[key] = cov
+    return out
 
 
 class Ros2PublisherParams(DdsEndpoint):
@@ -78,8 +101,17 @@ class Ros2PublisherParams(DdsEndpoint):
     tf_static: bool = Field(True, description="publish the URDF's fixed joints on /tf_static (latched) and "
                                               "leave their child links out of /tf")
     imu_frame: str | None = Field(None, description="publish /imu with this frame_id (IMU inputs wired)")
-    imu_gyro_noise: float = Field(0.0, ge=0, description="rad/s, for the covariance")
-    imu_accel_noise: float = Field(0.0, ge=0, description="m/s², for the covariance")
+    imu_gyro_noise: float = Field(0.0, ge=0, description="rad/s, standard deviation per axis (covariance σ²)")
+    imu_accel_noise: float = Field(0.0, ge=0, description="m/s², standard deviation per axis (covariance σ²)")
+    imu_orientation_noise: float = Field(0.0, ge=0, description="rad, standard deviation per axis of the "
+                                                                "orientation (covariance σ²)")
+    imu_provides: list[str] = Field(default_factory=lambda: list(IMU_QUANTITIES),
+                                    description=f"the IMU quantities wired ({', '.join(IMU_QUANTITIES)}); "
+                                                "the others get covariance element 0 = -1 (not provided)")
+    mesh_package: str | None = Field(None, description="publish /robot_description's meshes as "
+                                                        "package://MESH_PACKAGE/... (default: file:// URIs)")
+    mesh_package_path: str | None = Field(None, description="the folder package://MESH_PACKAGE/ stands for "
+                                                            "(default: the folder holding the robot's meshes/)")
     wrench_cuts: list[str] = Field(default_factory=list,
                                    description="force-torque sensor cuts (as force_torque_sensors.cuts): one "
                                                "/fts/<joint> WrenchStamped each, from sensor_wrenches")
@@ -89,7 +121,7 @@ def _nj(c):
     return (c.nj,)
 
 
-class Ros2Publisher(Component[Ros2PublisherParams]):
+class Ros2Publisher(ClosedAfterRun, Component[Ros2PublisherParams]):
     type_name = "ros2_publisher"
     is_sink = True
 
@@ -111,6 +143,11 @@ class Ros2Publisher(Component[Ros2PublisherParams]):
             raise ValueError(f"{self.name}: rates: unknown topics {unknown}; topics: {', '.join(TOPICS)}")
         if any(r < 0 for r in p.rates.values()):
             raise ValueError(f"{self.name}: rates must be >= 0 Hz (0: off)")
+        bad = sorted(set(p.imu_provides) - set(IMU_QUANTITIES))
+        if bad:
+            raise ValueError(f"{self.name}: imu_provides: unknown {bad}; quantities: {', '.join(IMU_QUANTITIES)}")
+        if p.mesh_package_path is not None and not p.mesh_package:
+            raise ValueError(f"{self.name}: mesh_package_path needs mesh_package (the package://NAME/ it stands for)")
         self.joints = robot.joints if robot is not None else ()
         self.links = robot.links if robot is not None else ()
         self.nj, self.nl = len(self.joints), len(self.links)
@@ -174,10 +211,10 @@ class Ros2Publisher(Component[Ros2PublisherParams]):
                 tpl.selection["poses"] = (7 * rows[:, None] + np.arange(7)).ravel()
             out["tf"] = ("/tf", M.TFMessage, tpl)
         if "imu" in self.topic_rates:
-            cov_g = list(np.diag(np.full(3, p.imu_gyro_noise ** 2)).ravel())
-            cov_a = list(np.diag(np.full(3, p.imu_accel_noise ** 2)).ravel())
-            msg = M.Imu(header=M.Header(frame_id=p.imu_frame), angular_velocity_covariance=cov_g,
-                        linear_acceleration_covariance=cov_a)
+            cov = imu_covariances(p.imu_orientation_noise, p.imu_gyro_noise, p.imu_accel_noise, p.imu_provides)
+            msg = M.Imu(header=M.Header(frame_id=p.imu_frame), orientation_covariance=cov["orientation"],
+                        angular_velocity_covariance=cov["angular_velocity"],
+                        linear_acceleration_covariance=cov["linear_acceleration"])
             fields = {"orientation": (lambda m, v: setattr(m, "orientation", M.Quaternion(*v)), 4),
                       "angular_velocity": (lambda m, v: setattr(m, "angular_velocity", M.Vector3(*v)), 3),
                       "linear_acceleration": (lambda m, v: setattr(m, "linear_acceleration", M.Vector3(*v)), 3)}
@@ -193,6 +230,13 @@ class Ros2Publisher(Component[Ros2PublisherParams]):
         return out
 
     # -- opening and closing ------------------------------------------------------------------
+    def before_run(self, t0, u):
+        """The DDS participant, writers and latched messages, opened before the clock starts."""
+        run = u.cache
+        if run.dds is None:
+            run.now = t0
+            self._open(run, u)
+
     def _open(self, run: "PublisherRun", u) -> None:
         from .transport import Ros2Participant
 
@@ -208,7 +252,7 @@ class Ros2Publisher(Component[Ros2PublisherParams]):
             from . import messages as M
 
             w = dds.writer("/robot_description", M.String)
-            w.write(M.String(data=self.robot.urdf))
+            w.write(M.String(data=self.description_text()))
         if self.static:
             from . import messages as M
 
@@ -275,6 +319,16 @@ class Ros2Publisher(Component[Ros2PublisherParams]):
                 writer.write(Float64(data=run.real_time_factor))
                 run.published["real_time_factor"] = run.published.get("real_time_factor", 0) + 1
         run.rtf_last = (t, now)
+
+    def description_text(self) -> str:
+        """/robot_description: the URDF with mesh URIs a ROS tool resolves (:mod:`.robot_description`)."""
+        text = getattr(self, "_description", None)
+        if text is None:
+            from .robot_description import ros_robot_description
+
+            text = self._description = ros_robot_description(self.robot, self.p.mesh_package,
+                                                             self.p.mesh_package_path)
+        return text
 
     def static_message(self, t: float = 0.0):
         """/tf_static: each URDF fixed joint's child link in its parent link's frame (the joint's origin)."""

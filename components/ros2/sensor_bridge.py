@@ -10,9 +10,20 @@ sensor port 'comp.port' with base B = /comp (the component's only such port) or 
     B/points         sensor_msgs/PointCloud2   a LidarScan (.sensor_messages: organised, NaN misses)
     B/image_raw      sensor_msgs/Image         a CameraFrame's image, mono8 or rgb8 (saturated at 1)
     B/depth          sensor_msgs/Image         its depth, 32FC1 m, NaN where nothing is hit
-    B/camera_info    sensor_msgs/CameraInfo    its model (pinhole, fisheye, CAHV; none for CAHVOR/E)
-    /tf              tf2_msgs/TFMessage        the sensor frame's pose in ``world_frame`` at the sample
-                                               (a star, as the publisher's links)
+    B/camera_info    sensor_msgs/CameraInfo    its model (pinhole, fisheye, CAHV; none for CAHVOR/E); a
+                                               stereo right camera's P[3] = -fx·baseline, R = I
+    /tf_static       tf2_msgs/TFMessage        once, transient local: each sensor frame that is not a robot
+                                               link, from the link it is mounted on (``mounts``,
+                                               :mod:`.sensor_frames`: one parent per frame)
+    /tf              tf2_msgs/TFMessage        only for a sample frame ``mounts`` does not name (a bridge
+                                               built by hand): its pose from ``world_frame`` at the sample
+
+Every message's ``frame_id`` is the sensor's frame in that tree: the URDF's link where the sensor sits
+exactly on one (a lidar on ``lidar``: frame ``lidar``; a camera on ``camera_left``:
+``camera_left_optical_frame``, child of ``camera_left``; the stereo right camera on the URDF's
+``camera_right`` when that link is where the baseline puts it), else a frame of its own named after the
+sample (``stereo_left_optical_frame``) on the mount link. ``snakesim run --ros2`` fills ``mounts`` from
+the sensors' params (:func:`.attach.attach_sensor_bridge`) and ``uses`` the sensors' robot.
 
 QoS: reliable, keep last 5 (matches both reliable subscribers, as rviz's, and best-effort ones,
 as the sensor-data profile's). Messages are serialised by rosbags' CDR codec and written
@@ -29,9 +40,11 @@ import weakref
 
 from pydantic import Field
 
-from snakesim.framework import Component, Input
+from snakesim.components.multibody.robot_model import RobotModel
+from snakesim.framework import Component, Input, Uses
 
-from .transport import DdsEndpoint, TopicQos
+from .sensor_frames import SensorFrameMount, resolve_sensor_frames
+from .transport import ClosedAfterRun, DdsEndpoint, TopicQos
 
 SENSOR_QOS = TopicQos(reliable=True, depth=5)
 
@@ -39,19 +52,30 @@ SENSOR_QOS = TopicQos(reliable=True, depth=5)
 class Ros2SensorBridgeParams(DdsEndpoint):
     sensors: list[str] = Field(default_factory=list, description="sensor outputs published, 'comp.port' each")
     bases: list[str] = Field(default_factory=list, description="topic base per sensor (default: /comp/port)")
-    world_frame: str = Field("world", description="parent frame of the sensor frames on /tf")
+    world_frame: str = Field("world", description="parent frame on /tf of a sample frame not in mounts")
+    mounts: dict[str, SensorFrameMount] = Field(
+        default_factory=dict, description="sample frame name (a LidarScan's or CameraFrame's .frame) -> its "
+                                          "mount (link, xyz, rpy, optical, baseline): the frame on /tf_static")
 
 
 def sensor_input_name(i: int) -> str:
     return f"sensor{i}"
 
 
-class Ros2SensorBridge(Component[Ros2SensorBridgeParams]):
+class Ros2SensorBridge(ClosedAfterRun, Component[Ros2SensorBridgeParams]):
     type_name = "ros2_sensor_bridge"
     is_sink = True
 
+    robot = Uses(RobotModel, required=False, doc="the links the sensors are mounted on (URDF frame names)")
+
     def setup(self):
         p = self.p
+        try:
+            #: sample frame name -> SensorFrame (the ROS frame, its parent link and transform, the baseline)
+            self.frames = resolve_sensor_frames(dict(p.mounts), self.robot)
+        except ValueError as e:
+            raise ValueError(f"{self.name}: mounts: {e}") from None
+        self.links = frozenset(self.robot.links) if self.robot is not None else frozenset()
         if p.bases and len(p.bases) != len(p.sensors):
             raise ValueError(f"{self.name}: bases has {len(p.bases)} entries for {len(p.sensors)} sensors")
         self.bases = list(p.bases) or ["/" + s.replace(".", "/") for s in p.sensors]
@@ -64,6 +88,7 @@ class Ros2SensorBridge(Component[Ros2SensorBridgeParams]):
     def update(self, t, xd, u):
         run = u.cache
         if run.dds is None:
+            run.now = t
             self._open(run)
         for i, base in enumerate(self.bases):
             sample = getattr(u, sensor_input_name(i))
@@ -76,6 +101,13 @@ class Ros2SensorBridge(Component[Ros2SensorBridgeParams]):
             self._publish(run, base, sample)
 
     # -- publishing -----------------------------------------------------------------------------
+    def before_run(self, t0, u):
+        """The DDS participant and /tf_static, opened before the clock starts."""
+        run = u.cache
+        if run.dds is None:
+            run.now = t0
+            self._open(run)
+
     def _open(self, run: "BridgeRun") -> None:
         from .messages import typestore
         from .transport import Ros2Participant
@@ -83,6 +115,11 @@ class Ros2SensorBridge(Component[Ros2SensorBridgeParams]):
         run.ts = typestore()
         run.dds = Ros2Participant(self.p.domain_id, self.p.interface)
         run.finalizer = weakref.finalize(run, run.dds.close)
+        static = self.static_message(run.now)
+        if static.transforms:
+            from . import messages as M
+
+            run.dds.writer("/tf_static", M.TFMessage).write(static)
 
     def _writer(self, run: "BridgeRun", topic: str, ros_name: str):
         from .messages import ros_type
@@ -100,35 +137,71 @@ class Ros2SensorBridge(Component[Ros2SensorBridgeParams]):
         from . import sensor_messages as SM
 
         ts = run.ts
+        sf = self.frames.get(sample.frame)
+        frame_id = self.frame_id(sample.frame)
         if isinstance(sample, LidarScan):
-            self._writer(run, f"{base}/points", SM.POINT_CLOUD2).write(SM.point_cloud2(ts, sample))
+            self._writer(run, f"{base}/points", SM.POINT_CLOUD2).write(SM.point_cloud2(ts, sample, frame_id))
         elif isinstance(sample, CameraFrame):
-            self._writer(run, f"{base}/image_raw", SM.IMAGE).write(SM.image(ts, sample))
-            self._writer(run, f"{base}/depth", SM.IMAGE).write(SM.depth_image(ts, sample))
-            info = SM.camera_info(ts, sample)
+            self._writer(run, f"{base}/image_raw", SM.IMAGE).write(SM.image(ts, sample, frame_id))
+            self._writer(run, f"{base}/depth", SM.IMAGE).write(SM.depth_image(ts, sample, frame_id))
+            info = SM.camera_info(ts, sample, frame_id, sf.baseline if sf is not None else 0.0)
             if info is not None:
                 self._writer(run, f"{base}/camera_info", SM.CAMERA_INFO).write(info)
         else:
             raise TypeError(f"{self.name}: a sensor input got {type(sample).__name__}, not a LidarScan or CameraFrame")
-        self._publish_frame(run, sample)
+        if sf is None and sample.frame not in self.links or sf is not None and sf.parent is not None:
+            self._publish_frame(run, sample)      # a frame of its own (a robot link is the publisher's)
         run.published += 1
 
+    def frame_id(self, sample_frame: str) -> str:
+        """The tf frame of the messages of a sample whose ``.frame`` is ``sample_frame``."""
+        sf = self.frames.get(sample_frame)
+        return sf.frame if sf is not None else sample_frame
+
     def _publish_frame(self, run: "BridgeRun", sample) -> None:
+        """On DDS a mounted frame is on /tf_static (sent once at open); a frame ``mounts`` does not name
+        goes on /tf from ``world_frame`` at the sample."""
         from . import messages as M
 
+        if sample.frame in self.frames:
+            return
         if run.tf is None:
             run.tf = run.dds.writer("/tf", M.TFMessage)
         run.tf.write(self.frame_message(sample))
 
     def frame_message(self, sample):
-        """The sensor frame's pose in ``world_frame`` at the sample, as a tf2_msgs/TFMessage."""
+        """The transform that places the sample's frame, stamped at the sample, as a tf2_msgs/TFMessage: a
+        mounted frame from its link (the /tf_static transform: one parent), another from ``world_frame``."""
         from . import messages as M
 
+        stamp = M.time_msg(max(sample.t, 0.0))
+        sf = self.frames.get(sample.frame)
+        if sf is not None and sf.parent is not None:
+            return M.TFMessage(transforms=[self._transform(sf, stamp)])
         x, y, z, qx, qy, qz, qw = (float(v) for v in sample.pose)
         return M.TFMessage(transforms=[M.TransformStamped(
-            header=M.Header(stamp=M.time_msg(max(sample.t, 0.0)), frame_id=self.p.world_frame),
-            child_frame_id=sample.frame,
+            header=M.Header(stamp=stamp, frame_id=self.p.world_frame), child_frame_id=self.frame_id(sample.frame),
             transform=M.Transform(translation=M.Vector3(x, y, z), rotation=M.Quaternion(qx, qy, qz, qw)))])
+
+    def static_message(self, t: float = 0.0):
+        """/tf_static: every mounted sensor frame that is not a robot link, from its link (once each)."""
+        from . import messages as M
+
+        stamp = M.time_msg(max(t, 0.0))
+        seen, out = set(), []
+        for sf in self.frames.values():
+            if sf.parent is not None and sf.frame not in seen:
+                seen.add(sf.frame)
+                out.append(self._transform(sf, stamp))
+        return M.TFMessage(transforms=out)
+
+    @staticmethod
+    def _transform(sf, stamp):
+        from . import messages as M
+
+        return M.TransformStamped(header=M.Header(stamp=stamp, frame_id=sf.parent), child_frame_id=sf.frame,
+                                  transform=M.Transform(translation=M.Vector3(*sf.translation),
+                                                        rotation=M.Quaternion(*sf.rotation)))
 
 
 @dataclasses.dataclass(eq=False)
@@ -143,6 +216,7 @@ class BridgeRun:
     tf: object = None
     published: int = 0
     finalizer: object = None
+    now: float = 0.0                      # sim time of the first tick (the /tf_static stamp)
 
     def close(self) -> None:
         if self.finalizer is not None:

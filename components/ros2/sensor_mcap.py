@@ -6,7 +6,8 @@ params and inputs, the same messages byte for byte (``B/points`` PointCloud2, ``
 ``B/depth`` Image, ``B/camera_info`` CameraInfo, the sensor frames on ``/tf``), each logged at its
 sample's own simulated time (ns). It writes into the same file as the run's ``ros2_mcap``
 recorder when both name one path (:class:`.mcap_recorder.McapFile` is shared per path), so one
-bag holds the robot's topics and what its sensors measured, as ``ros2 bag record`` would.
+bag holds the robot's topics and what its sensors measured, as ``ros2 bag record`` would. Its
+channels carry the bridge's QoS (reliable, keep last 5) as offered_qos_profiles.
 
 in   sensor0 .. sensor{k-1}   LidarScan or CameraFrame, one per entry of params.sensors
 out  none
@@ -20,14 +21,14 @@ from pathlib import Path
 
 from pydantic import Field
 
-from .mcap_recorder import McapChannel, McapFile, McapMessageWriter
-from .sensor_bridge import BridgeRun, Ros2SensorBridge, Ros2SensorBridgeParams
+from .mcap_recorder import CHUNK_SIZE, McapChannel, McapFile, McapMessageWriter
+from .sensor_bridge import SENSOR_QOS, BridgeRun, Ros2SensorBridge, Ros2SensorBridgeParams
 
 
 class Ros2SensorMcapParams(Ros2SensorBridgeParams):
     path: str = Field(..., description="MCAP file to write (replaced if it exists; shared with ros2_mcap)")
-    flush_period: float = Field(1.0, gt=0, description="wall s between chunk flushes (what a killed run loses)")
-    chunk_size: int = Field(1 << 20, gt=0, description="bytes per chunk before it is written (zstd compressed)")
+    flush_period: float = Field(1.0, gt=0, description="wall s at most between a message and its chunk on disk (what a killed run loses)")
+    chunk_size: int = Field(CHUNK_SIZE, gt=0, description="bytes per chunk before it is written (zstd compressed)")
 
 
 class Ros2SensorMcap(Ros2SensorBridge):
@@ -39,19 +40,28 @@ class Ros2SensorMcap(Ros2SensorBridge):
     def make_cache(self, x, u, y):
         return SensorMcapRun(last=[None] * len(self.p.sensors))
 
+    def before_run(self, t0, u):
+        """The shared file and /tf_static, opened before the clock starts, stamped at t0."""
+        u.cache.now_ns = int(round(max(t0, 0.0) * 1e9))
+        super().before_run(t0, u)
+
     def _open(self, run: "SensorMcapRun") -> None:
         from .messages import typestore
 
         run.ts = typestore()
-        run.dds = McapFile.shared(Path(self.p.path), self.p.chunk_size)
+        run.dds = McapFile.shared(Path(self.p.path), self.p.chunk_size, self.p.flush_period)
         run.writer = run.dds.writer
         run.finalizer = weakref.finalize(run, run.dds.release)      # also at interpreter exit
-        run.dds.flush_every(self.p.flush_period)
+        static = self.static_message(max(run.now_ns, 0) * 1e-9)      # the mounted frames, once, as on the wire
+        if static.transforms:
+            from . import messages as M
+
+            McapMessageWriter(McapChannel(run, run.dds.channel("/tf_static", M.TFMessage.ros_name))).write(static)
 
     def _writer(self, run: "SensorMcapRun", topic: str, ros_name: str):
         w = run.writers.get(topic)
         if w is None:
-            w = run.writers[topic] = McapChannel(run, run.dds.channel(topic, ros_name))
+            w = run.writers[topic] = McapChannel(run, run.dds.channel(topic, ros_name, SENSOR_QOS))
         return w
 
     def _publish(self, run: "SensorMcapRun", base: str, sample) -> None:
@@ -59,16 +69,14 @@ class Ros2SensorMcap(Ros2SensorBridge):
         super()._publish(run, base, sample)
 
     def _publish_frame(self, run: "SensorMcapRun", sample) -> None:
+        """As on the wire: a mounted frame is on /tf_static (written once at open), another on /tf."""
         from . import messages as M
 
+        if sample.frame in self.frames:
+            return
         if run.tf is None:
             run.tf = McapMessageWriter(McapChannel(run, run.dds.channel("/tf", M.TFMessage.ros_name)))
         run.tf.write(self.frame_message(sample))
-
-    def update(self, t, xd, u):
-        super().update(t, xd, u)
-        if u.cache.dds is not None:
-            u.cache.dds.flush_every(self.p.flush_period)
 
 
 @dataclasses.dataclass(eq=False)

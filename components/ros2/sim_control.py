@@ -78,7 +78,7 @@ from .commands import GRAVITY_TOPIC, JOINT_TOPIC, TRAJECTORY_TOPIC
 from .placement_requests import JOINTS_TOPIC, POSE_TOPIC, joint_positions_write, pose_write
 from .rejections import Rejected, RejectionLog
 from .tether_commands import TETHER_TOPIC
-from .transport import DdsEndpoint
+from .transport import ClosedAfterRun, DdsEndpoint
 
 PAUSE_TOPIC = "/sim/pause"
 STEP_TOPIC = "/sim/step"
@@ -103,7 +103,7 @@ class Ros2SimControlParams(DdsEndpoint):
     max_abs_position: float = Field(2 * math.pi, gt=0, description="rad; a larger |joint angle| is out of range")
 
 
-class Ros2SimControl(Component[Ros2SimControlParams]):
+class Ros2SimControl(ClosedAfterRun, Component[Ros2SimControlParams]):
     type_name = "ros2_sim_control"
     is_sink = True           # update() at its rate: the control ticks
     robot = Uses(RobotModel, required=False, doc="joint names and state layout for placement requests")
@@ -125,6 +125,11 @@ class Ros2SimControl(Component[Ros2SimControlParams]):
         return SimControlRun(paused=self.p.start_paused)
 
     # -- DDS ------------------------------------------------------------------------------------
+    def before_run(self, t0, u):
+        """The DDS readers and service servers, opened before the clock starts."""
+        if u.cache.dds is None:
+            self._open(u.cache)
+
     def _open(self, run: "SimControlRun") -> None:
         from . import messages as M
         from .transport import Ros2Participant
@@ -133,7 +138,8 @@ class Ros2SimControl(Component[Ros2SimControlParams]):
         topics = [(PAUSE_TOPIC, M.Bool), (STEP_TOPIC, M.UInt32), (RESET_TOPIC, M.Empty)]
         if self.placement:
             topics += [(POSE_TOPIC, M.PoseStamped), (JOINTS_TOPIC, M.JointState)]
-        run.readers = tuple((topic, typ, dds.reader(topic, typ)) for topic, typ in topics)
+        run.readers = tuple((topic, typ, dds.reader(topic, typ, on_malformed=run.malformed))
+                            for topic, typ in topics)
         if self.p.lockstep:
             run.commands = tuple((dds.reader(tp, typ), typ) for tp, typ in ((TRAJECTORY_TOPIC, M.JointTrajectory),
                                                                       (JOINT_TOPIC, M.JointState),
@@ -301,6 +307,11 @@ class SimControlRun:
     commands: tuple = ()
     clock: object = None
     finalizer: object = None
+
+    def malformed(self, topic: str, reason: str) -> None:
+        """A sample the transport dropped as malformed (it logged it): counted with the rejections."""
+        self.rejected += 1
+        self.last_reason = f"{topic}: dropped a malformed sample: {reason}"
 
     def close(self) -> None:
         if self.finalizer is not None:

@@ -41,7 +41,7 @@ from snakesim.framework import Component, Output
 from .command_reader import CommandReaderRun
 from .rejection_counts import count_rejection
 from .rejections import Rejected
-from .transport import DdsEndpoint
+from .transport import ClosedAfterRun, DdsEndpoint
 
 TETHER_TOPIC = "/tethers/attached"
 
@@ -50,7 +50,7 @@ class Ros2TetherCommandsParams(DdsEndpoint):
     tethers: int = Field(..., ge=1, description="how many tethers the commanded tethers component has")
 
 
-class Ros2TetherCommands(Component[Ros2TetherCommandsParams]):
+class Ros2TetherCommands(ClosedAfterRun, Component[Ros2TetherCommandsParams]):
     type_name = "ros2_tether_commands"
 
     attached = Output(shape=lambda c: (c.p.tethers,), unit="1", feedthrough=(), may_be_nan=True)

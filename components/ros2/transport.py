@@ -14,6 +14,13 @@ ROS 2's conventions on top of DDS:
                     ``/tf_static`` and ``/robot_description`` latched (reliable, transient local,
                     keep last 1), so a node that starts later still gets them
 
+Malformed input: a sample whose CDR does not decode as the topic's type (truncated, a sequence longer than
+the data, a string without its terminator: another type under the same name, a broken writer) is dropped
+by the reader (:class:`Ros2Reader`), never raised into the run: logged as a warning on ``snakesim.ros2``
+naming the topic and the decoder's reason (rate-limited as rejections are, :mod:`.rejections`), counted
+on the reader (``dropped``) and handed to the reader's ``on_malformed(topic, reason)``, by which the
+command sources count it with their rejections.
+
 Node graph: a participant can announce its endpoints as a ROS node on
 ``ros_discovery_info`` (:meth:`Ros2Participant.announce`, :mod:`.node_graph`),
 so ``ros2 node list`` shows it.
@@ -181,11 +188,15 @@ class Ros2Participant:
         self._entities.append(w)
         return w
 
-    def reader(self, topic: str, msg_type, qos: TopicQos | None = None, dds_name: str | None = None):
-        from cyclonedds.sub import DataReader
-
-        r = DataReader(self.participant, self._topic(topic, msg_type, dds_name),
-                       (qos or QOS.get(topic, DEFAULT_QOS)).qos())
+    def reader(self, topic: str, msg_type, qos: TopicQos | None = None, dds_name: str | None = None,
+               on_malformed=None):
+        """A reader (:class:`Ros2Reader`: malformed samples dropped, logged and passed to ``on_malformed``)."""
+        r = _reader_class()(self.participant, self._topic(topic, msg_type, dds_name),
+                            (qos or QOS.get(topic, DEFAULT_QOS)).qos())
+        r.ros_topic = dds_name or topic
+        # a bound method is held weakly: the reader must not keep its run's state (which closes it) alive
+        r.on_malformed = weakref.WeakMethod(on_malformed) if hasattr(on_malformed, "__self__") else (
+            (lambda f=on_malformed: f) if on_malformed is not None else None)
         self._entities.append(r)
         return r
 
@@ -217,6 +228,95 @@ class Ros2Participant:
 
     def __exit__(self, *exc):
         self.close()
+
+
+class MalformedSample(ValueError):
+    """A sample whose CDR did not decode as its topic's type (the reader dropped it)."""
+
+
+#: dropped malformed samples' log: reason key -> [wall s of the last line, dropped since]
+_MALFORMED_SEEN: dict[str, list] = {}
+MALFORMED_LOG_EVERY = 1.0          # wall s between two lines for one reason
+
+
+def _log_malformed(topic: str, reason: str) -> None:
+    """Warn that ``topic`` dropped a malformed sample, at most once per reason per MALFORMED_LOG_EVERY s."""
+    import logging
+    import time
+
+    from .rejections import reason_key
+
+    text = f"{topic}: dropped a malformed sample: {reason}"
+    key, now = reason_key(text), time.monotonic()
+    seen = _MALFORMED_SEEN.get(key)
+    if seen is not None and now - seen[0] < MALFORMED_LOG_EVERY:
+        seen[1] += 1
+        return
+    if len(_MALFORMED_SEEN) > 1000:
+        _MALFORMED_SEEN.clear()
+    more = seen[1] if seen is not None else 0
+    _MALFORMED_SEEN[key] = [now, 0]
+    logging.getLogger("snakesim.ros2").warning(
+        "%s%s", text, f" (and {more} more for this reason since the last line)" if more else "")
+
+
+_READER_CLASS = None
+
+
+def _reader_class():
+    """:class:`Ros2Reader`, defined on first use (cyclonedds is imported lazily)."""
+    global _READER_CLASS
+    if _READER_CLASS is None:
+        from cyclonedds._clayer import ddspy_take
+        from cyclonedds.core import DDSException, InstanceState, SampleState, ViewState
+        from cyclonedds.internal import InvalidSample
+        from cyclonedds.sub import DataReader
+
+        class Ros2Reader(DataReader):
+            """A DataReader whose :meth:`take` decodes sample by sample and drops (logs, counts, reports) one
+            that does not decode, instead of raising and losing the batch."""
+
+            ros_topic = ""
+            on_malformed = None
+            dropped = 0
+
+            def take(self, N: int = 1, condition=None, instance_handle=None):
+                if condition is not None or instance_handle is not None:
+                    return super().take(N, condition, instance_handle)
+                ret = ddspy_take(self._ref, SampleState.Any | ViewState.Any | InstanceState.Any, N)
+                if type(ret) is int:
+                    raise DDSException(ret, f"Occurred while taking data in {self!r}")
+                dtype = self._topic.data_type
+                out = []
+                for data, info in ret:
+                    try:
+                        if info.valid_data:
+                            m = dtype.deserialize(data)
+                            m.sample_info = info
+                        else:
+                            m = InvalidSample(dtype.deserialize_key(data), info)
+                    except Exception as e:          # noqa: BLE001 - any decoder error is a malformed sample
+                        self.dropped += 1
+                        reason = f"{len(data)} bytes do not decode as {dtype.__name__}: {type(e).__name__}: {e}"
+                        _log_malformed(self.ros_topic, reason)
+                        report = self.on_malformed() if self.on_malformed is not None else None
+                        if report is not None:
+                            report(self.ros_topic, reason)
+                        continue
+                    out.append(m)
+                return out
+
+        _READER_CLASS = Ros2Reader
+    return _READER_CLASS
+
+
+class ClosedAfterRun:
+    """Mixin of the ROS 2 components: what their run opened (``u.cache.close()``: a DDS participant and its
+    endpoints, a share of an MCAP file) is closed once the run has ended (Component.after_run), so a
+    recording is complete when ``run`` returns and a next run opens afresh."""
+
+    def after_run(self, u) -> None:
+        u.cache.close()
 
 
 class DdsEndpoint(Params):

@@ -1,3 +1,4 @@
+import itertools
 import os
 import sys
 
@@ -25,5 +26,7 @@ def dds_domain():
         Ros2Participant(base).close()
     except Exception as e:
         pytest.skip(f"Cyclone DDS cannot start on loopback in this sandbox: {e}")
-    counter = iter(range(base, 233))
+    # every valid domain id (0-232) once, from this session's base, before any is reused: a session
+    # of more tests than ids wraps round rather than running dry (a test's participants are closed by then)
+    counter = itertools.cycle([*range(base, 233), *range(1, base)])
     return lambda: next(counter)

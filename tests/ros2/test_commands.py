@@ -176,43 +176,169 @@ def test_attach_rule_schedule_kept_unless_takeover(dds_domain):
     assert sum(d == "pid.setpoint" for _, d, _ in r.connections) == 1
 
 
-def test_trajectory_points_followed_in_time_with_linear_interpolation(rig, robot):
-    """Unstamped: times count from the tick that took it (t = 1.0 s). Before the first point the joint keeps
-    its set-point; between points it is interpolated; after the last it holds."""
+def _poly(t0, t1, ends):
+    """The polynomial (numpy.polynomial, in t - t0) matching the end conditions ``ends`` = ((y0, y0', y0''...),
+    (y1, y1', ...)) on [t0, t1]: solved directly, not with the component's formulas."""
+    (e0, e1), T = ends, t1 - t0
+    n = len(e0) + len(e1)
+    rows, rhs = [], []
+    for tau, conds in ((0.0, e0), (T, e1)):
+        for k, v in enumerate(conds):
+            P = np.polynomial.Polynomial([0.0] * k + [1.0] * 0 + [0.0] * (n - k))
+            rows.append([math.prod(range(p - k + 1, p + 1)) * tau ** (p - k) if p >= k else 0.0 for p in range(n)])
+            rhs.append(v)
+    return np.polynomial.Polynomial(np.linalg.solve(np.array(rows), np.array(rhs)))
+
+
+def test_trajectory_starts_from_the_state_cubic_to_point_0_continuous_velocity_and_holds_the_last(rig, robot):
+    """JTC semantics: taken at t0 = 1.0 s (unstamped: start = t0), the set-point runs a cubic Hermite from the
+    measured state (q, qd) to point 0, cubic between points, velocity continuous at every point, the last
+    point held (rate 0); the joint the message does not name holds."""
     h, publish, take = rig
     j = list(robot.joints)
-    bend, twist = j.index("bend_00"), j.index("twist_00")
-    publish("/joint_command", _js(["bend_00"], position=[-0.4]))
+    bend, twist, other = j.index("bend_00"), j.index("twist_00"), j.index("bend_01")
+    q, qd = np.zeros(len(j)), np.zeros(len(j))
+    q[bend], qd[bend], q[twist], q[other] = -0.3, 0.8, 0.05, 0.2
+    h.set_input("q", q)
+    h.set_input("qd", qd)
+    publish("/joint_command", _js(["bend_01"], position=[0.25]))
     take(0.99, 1)
     publish("/joint_commands", _traj(["bend_00", "twist_00"], [[0.1, 0.0], [0.5, 0.2], [-0.2, 0.2]],
                                      velocities=[[0.0, 0.0], [1.0, 0.5], [0.0, 0.0]], times=[0.1, 0.3, 0.5]))
     out = take(1.0, 2)
-    assert out["applied"][0] == 2 and out["setpoint"][bend] == -0.4            # before T0 = 1.1 s: unchanged
-    expect = {1.1: (0.1, 0.0, 0.0), 1.2: (0.3, 0.1, 0.5), 1.25: (0.4, 0.15, 0.75), 1.3: (0.5, 0.2, 1.0),
-              1.4: (0.15, 0.2, 0.5), 1.5: (-0.2, 0.2, 0.0), 1.7: (-0.2, 0.2, 0.0)}
-    for t, (q_bend, q_twist, rate_bend) in expect.items():
+    assert out["applied"][0] == 2
+    assert out["setpoint"][bend] == pytest.approx(-0.3, abs=1e-12) and out["rate"][bend] == pytest.approx(0.8)
+    seg = [_poly(1.0, 1.1, ((-0.3, 0.8), (0.1, 0.0))), _poly(1.1, 1.3, ((0.1, 0.0), (0.5, 1.0))),
+           _poly(1.3, 1.5, ((0.5, 1.0), (-0.2, 0.0)))]
+    starts = [1.0, 1.1, 1.3]
+    for t in np.arange(1.0, 1.5, 0.01):
+        k = int(np.searchsorted(starts, t + 1e-12, side="right")) - 1
         out = h.outputs(t)
-        assert out["setpoint"][bend] == pytest.approx(q_bend, abs=1e-12), t
-        assert out["setpoint"][twist] == pytest.approx(q_twist, abs=1e-12), t
-        assert out["rate"][bend] == pytest.approx(rate_bend, abs=1e-12), t
-    assert h.u.cache.trajectories == []                                         # over: held, dropped
+        assert out["setpoint"][bend] == pytest.approx(seg[k](t - starts[k]), abs=1e-12), t
+        assert out["rate"][bend] == pytest.approx(seg[k].deriv()(t - starts[k]), abs=1e-10), t
+        assert out["setpoint"][other] == 0.25                                     # not named: holds
+    for T, v in ((1.1, 0.0), (1.3, 1.0)):                                        # velocity continuous at the points
+        before, after = h.outputs(T - 1e-9)["rate"][bend], h.outputs(T + 1e-9)["rate"][bend]
+        assert before == pytest.approx(v, abs=1e-6) and after == pytest.approx(v, abs=1e-6)
+    for t in (1.5, 1.7, 3.0):                                                    # the last point holds
+        out = h.outputs(t)
+        assert out["setpoint"][bend] == -0.2 and out["setpoint"][twist] == 0.2 and out["rate"][bend] == 0.0
+    assert h.u.cache.trajectories == []
 
 
-def test_stamped_trajectory_times_from_its_stamp_and_later_commands_take_joints_over(rig, robot):
+def test_trajectory_linear_with_positions_quintic_with_accelerations(rig, robot):
+    h, publish, take = rig
+    j = list(robot.joints)
+    bend = j.index("bend_00")
+    q = np.zeros(len(j))
+    q[bend] = 0.1
+    h.set_input("q", q)                                  # qd not wired: the rate in force (0) is the start velocity
+    publish("/joint_commands", _traj(["bend_00"], [[0.5], [0.3]], times=[0.2, 0.6]))
+    take(2.0, 1)
+    for t, (sp, rate) in {2.0: (0.1, 2.0), 2.1: (0.3, 2.0), 2.2: (0.5, -0.5), 2.4: (0.4, -0.5), 2.6: (0.3, 0.0)}.items():
+        out = h.outputs(t)
+        assert out["setpoint"][bend] == pytest.approx(sp, abs=1e-12), t
+        assert out["rate"][bend] == pytest.approx(rate, abs=1e-12), t
+    pts = [M.JointTrajectoryPoint(positions=[0.3], velocities=[0.0], accelerations=[0.0], time_from_start=_dur(0.1)),
+           M.JointTrajectoryPoint(positions=[0.7], velocities=[0.5], accelerations=[-2.0], time_from_start=_dur(0.5))]
+    publish("/joint_commands", M.JointTrajectory(joint_names=["bend_00"], points=pts))
+    take(3.0, 2)
+    quintic = _poly(3.1, 3.5, ((0.3, 0.0, 0.0), (0.7, 0.5, -2.0)))
+    for t in np.arange(3.1, 3.5, 0.05):
+        out = h.outputs(t)
+        assert out["setpoint"][bend] == pytest.approx(quintic(t - 3.1), abs=1e-12), t
+        assert out["rate"][bend] == pytest.approx(quintic.deriv()(t - 3.1), abs=1e-10), t
+
+
+def test_stamped_trajectory_future_stamp_delays_and_a_new_one_replaces_the_old_from_now(rig, robot):
     h, publish, take = rig
     j = list(robot.joints)
     bend, twist = j.index("bend_00"), j.index("twist_00")
     publish("/joint_commands", _traj(["bend_00", "twist_00"], [[0.0, 0.0], [0.4, -0.4]], times=[0.0, 0.4],
                                      stamp=2.0))
-    take(2.05, 1)                                   # taken at 2.05 s, but its times count from the stamp
+    take(1.5, 1)                        # taken at 1.5 s; its times count from the stamp: point 0 due at 2.0 s
+    out = h.outputs(1.75)               # halfway from the state at 1.5 s (set-points 0: q not wired) to point 0
+    assert out["setpoint"][bend] == pytest.approx(0.0, abs=1e-12)
     out = h.outputs(2.1)
     assert out["setpoint"][bend] == pytest.approx(0.1, abs=1e-12)
     assert out["setpoint"][twist] == pytest.approx(-0.1, abs=1e-12)
-    publish("/joint_command", _js(["twist_00"], position=[0.25]))                # takes twist over
+    publish("/joint_commands", _traj(["bend_00"], [[-0.3]], times=[0.1]))         # replaces it at 2.2 s
     out = take(2.2, 2)
-    assert out["setpoint"][bend] == pytest.approx(0.2, abs=1e-12) and out["setpoint"][twist] == 0.25
-    out = h.outputs(2.3)
-    assert out["setpoint"][bend] == pytest.approx(0.3, abs=1e-12) and out["setpoint"][twist] == 0.25
+    assert out["setpoint"][bend] == pytest.approx(0.2, abs=1e-12)                 # from the state at 2.2 s
+    assert out["setpoint"][twist] == pytest.approx(-0.2, abs=1e-12) and out["rate"][twist] == 0.0
+    out = h.outputs(2.25)
+    assert out["setpoint"][bend] == pytest.approx(-0.05, abs=1e-12)
+    assert out["setpoint"][twist] == pytest.approx(-0.2, abs=1e-12)               # not named: holds
+    publish("/joint_command", _js(["bend_00"], position=[0.25]))                  # a JointState takes joints over
+    out = take(2.26, 3)
+    assert out["setpoint"][bend] == 0.25 and h.u.cache.trajectories == []
+    publish("/joint_commands", _traj(["bend_00"], [[0.1], [0.2]], times=[0.0, 0.01], stamp=2.25))
+    take(2.3, 4)                                                                 # ended at 2.26 s: in the past
+    assert "the whole trajectory is in the past" in h.u.cache.last_reason
+
+
+def test_path_and_goal_tolerances_abort_and_count(dds_domain, robot, caplog):
+    from snakesim.components.ros2.commands import Ros2Commands
+
+    h = Harness(Ros2Commands, {"domain_id": dds_domain(), "path_tolerance": {"bend_00": 0.05},
+                               "goal_tolerance": 0.01, "goal_time": 0.2}, rate=100.0, name="cmd", uses={"robot": robot})
+    j = list(robot.joints)
+    bend, twist = j.index("bend_00"), j.index("twist_00")
+    q = np.zeros(len(j))
+    h.set_input("q", q)
+    h.outputs(0.0)
+    run, cmd = h.u.cache, h.c
+    with caplog.at_level(logging.WARNING, logger="snakesim.ros2"):
+        cmd.apply(run, "/joint_commands", _traj(["bend_00", "twist_00"], [[0.5, 0.5]], times=[1.0]), 0.0, h.y)
+        out = h.outputs(0.5)                     # q = 0, set-point 0.25 > 0.05 past: aborted at the next tick
+        out = h.outputs(0.51)
+        assert out["aborted"][0] == 1 and run.trajectories == []
+        assert out["setpoint"][bend] == 0.0 and out["setpoint"][twist] == 0.0 and out["rate"][bend] == 0.0
+        assert "path tolerance of bend_00 violated" in run.last_violation
+        cmd.apply(run, "/joint_commands", _traj(["twist_00"], [[0.3]], times=[0.1]), 1.0, h.y)
+        for t in (1.05, 1.1, 1.2):
+            out = h.outputs(t)
+        assert out["goal_missed"][0] == 0 and len(run.trajectories) == 1          # within goal_time: waiting
+        out = h.outputs(1.31)
+        assert out["goal_missed"][0] == 1 and run.trajectories == [] and out["setpoint"][twist] == 0.3
+        assert "goal tolerance of twist_00 violated" in run.last_violation
+        q[twist] = 0.3
+        h.set_input("q", q)
+        cmd.apply(run, "/joint_commands", _traj(["twist_00"], [[0.3]], times=[0.1]), 2.0, h.y)
+        h.outputs(2.1)
+        assert h.outputs(2.11)["goal_missed"][0] == 1 and run.trajectories == []  # reached: no violation
+    lines = [r.getMessage() for r in caplog.records if r.name == "snakesim.ros2"]
+    assert any("path tolerance" in x for x in lines) and any("goal tolerance" in x for x in lines)
+    run.close()
+
+
+def test_malformed_cdr_dropped_logged_and_counted(rig, robot, caplog):
+    """A sample whose bytes do not decode as the topic's type (a joint name that is not UTF-8, as a broken writer
+    sends: raw bytes under the right type; Cyclone itself refuses structurally broken CDR) is dropped by the transport with a warning naming the topic and the
+    reason, counted with the rejections; the valid samples after it are applied."""
+    from cyclonedds._clayer import ddspy_write
+
+    from snakesim.components.ros2.transport import Ros2Participant
+
+    h, publish, take = rig
+    dds = Ros2Participant(h.c.p.domain_id)
+    w = dds.writer("/joint_command", M.JointState)
+    deadline = time.monotonic() + 10
+    while not w.get_matched_subscriptions():
+        assert time.monotonic() < deadline
+        time.sleep(0.02)
+    raw = _js(["bend_00"], position=[0.2]).serialize()
+    with caplog.at_level(logging.WARNING, logger="snakesim.ros2"):
+        assert ddspy_write(w._ref, raw.replace(b"bend_00", b"\xff\xfend_00")) == 0      # not UTF-8
+        out = take(1.0, 1)
+        publish("/joint_command", _js(["bend_00"], position=[0.2]))
+        out = take(1.0, 2)
+    assert out["rejected"][0] == 1 and out["applied"][0] == 1
+    assert out["setpoint"][list(robot.joints).index("bend_00")] == 0.2
+    assert "/joint_command: dropped a malformed sample" in h.u.cache.last_reason
+    lines = [r.getMessage() for r in caplog.records if "dropped a malformed sample" in r.getMessage()]
+    assert len(lines) == 1 and "/joint_command" in lines[0] and "do not decode as JointState" in lines[0]
+    dds.close()
 
 
 def test_the_same_reason_is_logged_at_most_once_per_period_with_a_count(rig, robot, caplog):

@@ -29,7 +29,10 @@ def test_joint_states_at_the_set_rate_and_clock_advancing(dds_domain):
     assert len(clock) >= 0.8 * expected and all(b > a for a, b in zip(clock, clock[1:]))
     assert clock[-1] >= DURATION - 2 / RATE
     assert got["tf_count"] > 0 and got["tf_frames"][0][0] == "world"
-    assert got["description_chars"] == len(robot.urdf)
+    # the URDF with its meshes as file:// URIs (components/ros2/robot_description.py)
+    from snakesim.components.ros2.robot_description import ros_robot_description
+
+    assert got["description_chars"] == len(ros_robot_description(robot))
 
 
 FALLING = """\

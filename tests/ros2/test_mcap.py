@@ -66,7 +66,7 @@ def test_recording_decodes_with_the_published_topics_types_counts_and_bytes(dds_
     assert {topics[k]: n for k, n in prun.published.items() if k in topics} == \
         {t: len(got[t]) for t in topics.values()}
     assert len(got["/robot_description"]) == 1
-    assert got["/robot_description"][0][1].data == s.plan.components[pub].robot.urdf
+    assert got["/robot_description"][0][1].data == s.plan.components[pub].description_text()     # file:// URIs
     # /tf_static: once, at the first tick, the publisher's latched message byte for byte
     assert len(got["/tf_static"]) == 1 and got["/tf_static"][0][3] == 0
     static = s.plan.components[pub].static_message(0.0)

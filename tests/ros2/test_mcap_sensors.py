@@ -56,6 +56,14 @@ def test_sensor_topics_share_the_bag_with_the_robot_topics(dds_domain, tmp_path)
     assert np.nanmin(xyz[:, 2]) == pytest.approx(-(0.3 + 0.0675), abs=1e-4)
     depth = got["/stereo/left/depth"][0][1]
     assert (depth.encoding, depth.width, depth.height) == ("32FC1", 64, 48)
-    # the sensor frames on /tf, in the one /tf channel with the robot's links
-    frames = {tr.child_frame_id for _s, m, _r, _t in got["/tf"] for tr in m.transforms}
-    assert {"lidar", "stereo/left", "stereo/right"} <= frames and "tail" in frames
+    # the sensor frames in the one tf tree with the robot's links, each with one parent: the lidar is the URDF's
+    # lidar link, each camera's optical frame hangs off the URDF's camera link (components/ros2/sensor_frames.py)
+    parents = {}
+    for topic in ("/tf", "/tf_static"):
+        for _s, m, _r, _t in got.get(topic, []):
+            for tr in m.transforms:
+                parents.setdefault(tr.child_frame_id, set()).add(tr.header.frame_id)
+    assert parents["camera_left_optical_frame"] == {"camera_left"}
+    assert parents["camera_right_optical_frame"] == {"camera_right"}
+    assert "lidar" in parents and "tail" in parents
+    assert all(len(p) == 1 for p in parents.values()), {f: p for f, p in parents.items() if len(p) > 1}

@@ -1,5 +1,6 @@
 """The ros2_publisher sink in process: --ros2 wiring by role, per-topic rates, the cost of publishing."""
 
+import threading
 import time
 
 import pytest
@@ -59,7 +60,7 @@ def test_tf_static_has_the_fixed_joints_and_tf_leaves_their_links_out(dds_domain
     from snakesim.components.ros2.transport import Ros2Participant
 
     domain = dds_domain()
-    resolved, reg = _scene(duration=0.05)
+    resolved, reg = _scene(duration=1.5)
     name = attach_ros2(resolved, reg, params={"domain_id": domain, "rates": {"real_time_factor": 20.0}})
     s = Session(resolved, reg)
     pub = s.plan.components[name]
@@ -67,9 +68,11 @@ def test_tf_static_has_the_fixed_joints_and_tf_leaves_their_links_out(dds_domain
     assert fixed, "the test robot has fixed joints (head, imu, cameras, lidar)"
     static_links = {j.child for j in fixed}
     assert [pub.links[i] for i in pub.tf_rows] == [ln for ln in pub.links if ln not in static_links]
-    s.run()
-    run = s.plan.caches[name]
-    # latched: a reader that joins after the run's first tick still gets it
+    # latched: a reader that joins after the run's first tick still gets it (the run paced to the wall
+    # clock in a thread, the reader made 0.3 s in; the endpoints close when the run ends)
+    runner = threading.Thread(target=s.run, kwargs={"realtime": True})
+    runner.start()
+    time.sleep(0.3)
     with Ros2Participant(domain) as dds:
         reader = dds.reader("/tf_static", M.TFMessage)
         msgs = []
@@ -77,7 +80,9 @@ def test_tf_static_has_the_fixed_joints_and_tf_leaves_their_links_out(dds_domain
         while not msgs and time.monotonic() < end:
             msgs = [m for m in reader.take(N=10) if isinstance(m, M.TFMessage)]
             time.sleep(0.01)
-    run.close()
+    runner.join(timeout=30)
+    run = s.plan.caches[name]
+    assert run.dds is None                  # closed when the run ended (ClosedAfterRun)
     assert len(msgs) == 1
     got = {tr.child_frame_id: tr for tr in msgs[0].transforms}
     assert set(got) == static_links

@@ -54,7 +54,8 @@ def test_point_clouds_images_and_camera_info_reach_a_separate_process(dds_domain
     info = got["info"][0]
     f = 32.0 / math.tan(math.radians(45.0))                      # 90° across 64 px
     np.testing.assert_allclose(info["k"], [f, 0, 31.5, 0, f, 23.5, 0, 0, 1], atol=1e-9)
-    assert info["model"] == "plumb_bob" and img["frame"] == "stereo/left"
+    # the URDF's camera_left link is where the left camera sits: its optical frame (tf tree: test_frames_and_camera_info)
+    assert info["model"] == "plumb_bob" and img["frame"] == info["frame"] == "camera_left_optical_frame"
 
 
 def test_bridge_bytes_decode_to_the_measurement():
