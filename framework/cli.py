@@ -173,6 +173,7 @@ class _SnakesimGroup(click.Group):
 
 
 @click.group(cls=_SnakesimGroup, context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(package_name="snakesim", prog_name="snakesim", message="%(prog)s %(version)s")
 def cli():
     """snakesim: a dataflow simulator for snake robots (and anything else built from components)."""
 
@@ -386,6 +387,22 @@ def components(as_json, markdown):
 
 
 @cli.command()
+@click.option("--markdown", is_flag=True, help="The scene catalogue as Markdown (docs/scenes.md).")
+def scenes(markdown):
+    """List every scene with the first sentence of its description."""
+    from .scene_catalogue import first_sentence, scene_entries, scenes_markdown
+
+    reg = default_registry()
+    entries = scene_entries(reg.assembly_paths(), reg.default_assembly())
+    if markdown:
+        click.echo(scenes_markdown(entries), nl=False)
+        return
+    width = max((len(e["name"]) for e in entries), default=0)
+    for e in entries:
+        click.echo(f"{e['name']:<{width}}  {'(default) ' if e['default'] else ''}{first_sentence(e['description'])}")
+
+
+@cli.command()
 @click.argument("assembly", required=False)
 @scene_options
 @click.option("-o", "--output", "output", required=True, type=click.Path(dir_okay=False),
@@ -444,6 +461,9 @@ def install_plugin_cli(registry=None) -> click.Group:
             _RUN_OPTIONS[option.name] = apply
             if not any(p.name == option.name for p in run.params):
                 run.params.append(option)
+            # options that only add components (apply.for_check: --lidar, --stereo) build the same in check
+            if getattr(apply, "for_check", False) and not any(p.name == option.name for p in check.params):
+                check.params.append(option)
     cli._plugins_installed = True
     return cli
 

@@ -1,6 +1,7 @@
-"""Every command README.md shows runs as pasted, after the set-up line.
+"""Every command README.md shows runs as pasted, after the set-up line; so does every command of the
+pages the README's sections moved to (docs/viewer.md, docs/perception.md, docs/ros2.md).
 
-Each line of a ```bash``` block, and each ``$ `` line of a ```console``` block, is split at ``&&``
+Each page's commands run in a scratch folder of their own. Each line of a ```bash``` block, and each ``$ `` line of a ```console``` block, is split at ``&&``
 and run in page order in one scratch folder (the repository's ``configs/`` linked in, since the
 tour names a file there), so a command may use what an earlier one wrote (``--out runs/p1``, then
 ``run runs/p1/config.yaml``). ``snakesim`` commands run in-process through click with the
@@ -9,7 +10,7 @@ environment activated, as the tour says. Left out, and why:
 - set-up lines that create the venv and install packages (``python3 -m venv``, ``pip install``):
   the environment running this test is that set-up's result; ``source .venv/bin/activate``
   is what running in it means; their ``pytest`` would run this very suite;
-- the ROS 2 block that starts ``snakesim run --ros2-commands ... &`` and ``python ros2_node.py``:
+- the ROS 2 block (docs/ros2.md) that starts ``snakesim run --ros2-commands ... &`` and ``python ros2_node.py``:
   tests/docs/test_ros2_readme.py runs it; ``ros2 ...`` lines need a ROS 2 installation;
 - ``export`` lines (they only configure that ROS 2 block).
 
@@ -27,20 +28,23 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from doc_blocks import blocks
+from doc_blocks import DOCS, blocks
 
 REPO = Path(__file__).resolve().parents[2]
 PAGE = "../README.md"
+#: the pages README sections moved to, relative to docs/ (their commands run as the README's do)
+MOVED_PAGES = ("viewer.md", "perception.md", "ros2.md")
+PAGES = (PAGE,) + MOVED_PAGES
 SHORT = ["--duration", "0.04"]     # whole steps of 1, 2, 4, 5, 10 and 20 ms
 SET_UP = ("python3 -m venv", "pip install", "source .venv/bin/activate")
 TESTED_ELSEWHERE = ("--ros2-commands", "python ros2_node.py")      # tests/docs/test_ros2_readme.py
 NEEDS_ROS = ("ros2 ", "export ")
 
 
-def readme_commands() -> list[tuple[int, list[str]]]:
-    """(line, argv) of every command the README shows, in page order, set-up and ROS 2 lines left out."""
+def readme_commands(page: str = PAGE) -> list[tuple[int, list[str]]]:
+    """(line, argv) of every command a page shows, in page order, set-up and ROS 2 lines left out."""
     out = []
-    for b in blocks(PAGE):
+    for b in blocks(page):
         if b.lang == "bash":
             lines = b.text.splitlines()
         elif b.lang == "console":
@@ -57,15 +61,20 @@ def readme_commands() -> list[tuple[int, list[str]]]:
     return out
 
 
-def test_the_readme_names_no_file_a_clone_lacks():
-    text = (REPO / "README.md").read_text()
+def _name(page: str) -> str:
+    return (DOCS / page).resolve().relative_to(REPO).as_posix()
+
+
+@pytest.mark.parametrize("page", PAGES)
+def test_the_page_names_no_file_a_clone_lacks(page):
+    text = (DOCS / page).read_text()
     assert "../shared" not in text
-    assert readme_commands(), "no commands found in README.md"
-    for line, argv in readme_commands():
-        assert argv[0] == "snakesim", f"README.md:{line}: only snakesim commands are expected here: {argv}"
+    assert readme_commands(page), f"no commands found in {_name(page)}"
+    for line, argv in readme_commands(page):
+        assert argv[0] == "snakesim", f"{_name(page)}:{line}: only snakesim commands are expected here: {argv}"
 
 
-def test_every_readme_command_runs(tmp_path, monkeypatch):
+def _run_page(page, tmp_path, monkeypatch):
     from snakesim.framework.cli import cli, install_plugin_cli
 
     install_plugin_cli()
@@ -74,13 +83,23 @@ def test_every_readme_command_runs(tmp_path, monkeypatch):
     monkeypatch.setenv("CI", "1")                 # --viz spawn saves instead of opening a window
     monkeypatch.delenv("DISPLAY", raising=False)
     monkeypatch.setenv("MPLBACKEND", "Agg")
-    for line, argv in readme_commands():
+    for line, argv in readme_commands(page):
         args = argv[1:] + (SHORT if argv[1:2] == ["run"] else [])
         result = CliRunner().invoke(cli, args, catch_exceptions=False)
         if result.exit_code != 0:
-            pytest.fail(f"README.md:{line}: `{shlex.join(argv)}` exited {result.exit_code}:\n{result.output}",
+            pytest.fail(f"{_name(page)}:{line}: `{shlex.join(argv)}` exited {result.exit_code}:\n{result.output}",
                         pytrace=False)
+
+
+def test_every_readme_command_runs(tmp_path, monkeypatch):
+    _run_page(PAGE, tmp_path, monkeypatch)
     # what the tour's later commands read, the earlier ones wrote
-    assert (tmp_path / "my-eels.urdf").is_file() and (tmp_path / "runs" / "p1" / "config.yaml").is_file()
-    assert (tmp_path / "runs" / "c1" / "replay.rrd").is_file() and (tmp_path / "runs" / "chain.svg").is_file()
-    assert not any(p.name in ("ice.yaml", "chain.svg") for p in tmp_path.iterdir()), "tour writes under runs/"
+    runs = tmp_path / "runs"
+    assert (runs / "my-eels.urdf").is_file() and (runs / "meshes").is_dir() and (runs / "p1" / "config.yaml").is_file()
+    assert (runs / "c1" / "replay.rrd").is_file() and (runs / "chain.svg").is_file()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["configs", "runs"], "the tour writes under runs/ only"
+
+
+@pytest.mark.parametrize("page", MOVED_PAGES)
+def test_every_command_of_a_moved_page_runs(page, tmp_path, monkeypatch):
+    _run_page(page, tmp_path, monkeypatch)
