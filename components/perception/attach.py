@@ -102,3 +102,34 @@ def attach_stereo(resolved: Resolved, size: str, registry=None) -> None:
     params = {"link": "camera_left", "width": w, "height": h, "baseline": 0.0675,
               "model": {"kind": "pinhole", "fov": 90.0}}
     _add(resolved, STEREO, ComponentSpec(type="stereo_camera", rate=CAMERA_RATE, params=params), scene, "--stereo")
+
+
+#: run options whose sinks take every sensor output (a LIDAR_SCAN or CAMERA_FRAME role): what each does with it
+SENSOR_SINK_OPTIONS = {"viz": "drawn by --viz", "ros2": "published on ROS 2 (--ros2)",
+                       "ros2_mcap": "published on ROS 2 and recorded to the --ros2-mcap file"}
+
+
+def _resolution(name: str, spec: ComponentSpec) -> str:
+    p = spec.params
+    if name == STEREO or "width" in p:
+        return f"{p['width']}x{p['height']} px, two views"
+    beams = PRESETS[p["preset"]]["beams"]
+    n = getattr(beams, "channels", None)
+    if n is not None:
+        return f"{p['preset']}, {n} channels x {beams.horizontal_samples} beams"
+    return f"{p['preset']}, {beams.points} beams"
+
+
+def sensor_notice(resolved: Resolved, name: str, sinks=()) -> str:
+    """One line for a sensor ``--lidar``/``--stereo`` added: its name, resolution, rate and frame (the link
+    it is mounted on), and where its data go: the recorded ports of it (``resolved.record``), the run
+    options in ``sinks`` that take it (names of SENSOR_SINK_OPTIONS), or that nothing publishes it."""
+    spec = resolved.components[name]
+    where = [SENSOR_SINK_OPTIONS[s] for s in sinks if s in SENSOR_SINK_OPTIONS]
+    recorded = [ref for ref, _ in resolved.record if ref.split(".", 1)[0] == name]
+    if recorded:
+        where.append("recorded: " + ", ".join(recorded))
+    if not where:
+        where = ["not published: add --viz or --ros2"]
+    return (f"sensor {name} ({spec.type}): {_resolution(name, spec)}, {spec.rate:g} Hz, frame "
+            f"'{spec.params['link']}'; " + "; ".join(where))

@@ -1,4 +1,9 @@
-"""``snakesim run --lidar PRESET --stereo WxH``: head sensors on any scene (see .attach)."""
+"""``snakesim run --lidar PRESET --stereo WxH``: head sensors on any scene (see .attach).
+
+Each sensor added is told on stderr in one line (:func:`.attach.sensor_notice`): name, resolution, rate,
+frame, and where its data go (the sinks given on the same command line, the recorded ports) or that nothing
+publishes them. ``snakesim check`` takes the same two options (``for_check``).
+"""
 
 from __future__ import annotations
 
@@ -9,16 +14,38 @@ from snakesim.framework import hookimpl
 from .beam_patterns import PRESETS
 
 
+def _sinks_given() -> list[str]:
+    """The sensor-taking run options (attach.SENSOR_SINK_OPTIONS) given on this command line: they are
+    applied after the sensors (``adds_sink``), so the notice looks at the command's parameters."""
+    from .attach import SENSOR_SINK_OPTIONS
+
+    ctx = click.get_current_context(silent=True)
+    params = ctx.params if ctx is not None else {}
+    return [name for name in SENSOR_SINK_OPTIONS if params.get(name)]
+
+
+def _tell(resolved, name: str) -> None:
+    from .attach import sensor_notice
+
+    click.echo(sensor_notice(resolved, name, _sinks_given()), err=True)
+
+
 def _lidar(resolved, value):
-    from .attach import attach_lidar
+    from .attach import LIDAR, attach_lidar
 
     attach_lidar(resolved, value)
+    _tell(resolved, LIDAR)
 
 
 def _stereo(resolved, value):
-    from .attach import attach_stereo
+    from .attach import STEREO, attach_stereo
 
     attach_stereo(resolved, value)
+    _tell(resolved, STEREO)
+
+
+# `snakesim check --lidar ... --stereo ...` builds what `run` would (framework/cli.py install_plugin_cli)
+_lidar.for_check = _stereo.for_check = True
 
 
 @hookimpl(specname="snakesim_run_options")

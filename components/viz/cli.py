@@ -16,7 +16,8 @@ from snakesim.framework import SnakesimError, hookimpl
 from .target import USAGE, VizTarget, VizTargetError, parse_target
 
 VIZ_HELP = (f"Show the run in rerun: {USAGE}. spawn opens a viewer (headless machines: saves "
-            "snakesim.rrd instead), save writes FILE.rrd, serve streams to a web viewer.")
+            "snakesim.rrd instead), save writes FILE.rrd, serve streams to a web viewer on this machine "
+            "(see --viz-host, --viz-port) and keeps serving after the run until Ctrl-C.")
 
 
 class TargetType(click.ParamType):
@@ -59,18 +60,65 @@ class TargetOption(click.Option):
             entry.process = take_file
 
 
+SERVE_OPTIONS = {"viz_host": "serve_host", "viz_port": "serve_port", "viz_grpc_port": "grpc_port"}
+
+
+def _serve_params(target: VizTarget) -> dict:
+    """The sink's serve_* params from --viz-host/--viz-port/--viz-grpc-port (read from the command's
+    parameters: each option is applied on its own), their ports checked free before anything is built."""
+    import dataclasses
+
+    from snakesim.framework.errors import ConfigError
+
+    from .target import check_serve_ports
+
+    ctx = click.get_current_context(silent=True)
+    given = {k: v for k, v in (ctx.params if ctx is not None else {}).items() if k in SERVE_OPTIONS and v is not None}
+    if target.mode != "serve":
+        if given:
+            opts = ", ".join("--" + k.replace("_", "-") for k in given)
+            raise ConfigError(f"{opts} only apply to --viz serve (this run has --viz {target})", "--viz")
+        return {}
+    params = {SERVE_OPTIONS[k]: v for k, v in given.items()}
+    full = dataclasses.replace(target, host=params.get("serve_host", target.host),
+                               port=params.get("serve_port", target.port),
+                               grpc_port=params.get("grpc_port", target.grpc_port))
+    try:
+        check_serve_ports(full)             # before the build: a busy port is said at once, not mid-run
+    except VizTargetError as e:
+        raise SnakesimError(str(e)) from None
+    return params
+
+
 def _apply(resolved, target: VizTarget) -> None:
     from .attach import attach_viewer
 
-    attach_viewer(resolved, target)
+    attach_viewer(resolved, target, params=_serve_params(target) or None)
 
 
 _apply.adds_sink = True        # after options that add components: it shows what they add
 
 
+def _serve_option(resolved, value):
+    """Read by --viz's own apply (_serve_params); nothing to do alone, except without --viz."""
+    ctx = click.get_current_context(silent=True)
+    if ctx is not None and ctx.params.get("viz") is None:
+        from snakesim.framework.errors import ConfigError
+
+        raise ConfigError("--viz-host/--viz-port/--viz-grpc-port need --viz serve", "--viz")
+
+
 @hookimpl(specname="snakesim_run_options")
 def viz_run_options():
-    return [(TargetOption(["--viz"], type=TargetType(), default=None, help=VIZ_HELP), _apply)]
+    return [(TargetOption(["--viz"], type=TargetType(), default=None, help=VIZ_HELP), _apply),
+            (click.Option(["--viz-host"], default=None, metavar="HOST",
+                          help="--viz serve: the address its servers listen on (default 127.0.0.1, this machine "
+                               "only; 0.0.0.0 opens them to the network)"), _serve_option),
+            (click.Option(["--viz-port"], type=click.IntRange(1, 65535), default=None, metavar="PORT",
+                          help="--viz serve: the web viewer's port (default 9090)"), _serve_option),
+            (click.Option(["--viz-grpc-port"], type=click.IntRange(1, 65535), default=None, metavar="PORT",
+                          help="--viz serve: the recording's gRPC port, for `rerun --connect` (default 9876)"),
+             _serve_option)]
 
 
 @click.command("replay")

@@ -49,6 +49,8 @@ the physical / ornamental contract: :mod:`.entities`.
 
 from __future__ import annotations
 
+import atexit
+import dataclasses
 import sys
 import time
 import weakref
@@ -97,6 +99,12 @@ class RerunSinkParams(Params):
     frustum_depth: float = Field(0.3, gt=0, description="m, length of a camera's drawn frustum")
     tether_lines: list[dict] = Field(default_factory=list,
                                      description="[{link, offset, anchor}]: straight ropes drawn from link_poses")
+    serve_host: str = Field("127.0.0.1", description="serve: the address its servers bind (0.0.0.0: every "
+                                                     "interface, reachable from other machines)")
+    serve_port: int = Field(9090, ge=0, le=65535, description="serve: the web viewer's HTTP port")
+    grpc_port: int = Field(9876, ge=0, le=65535, description="serve: the gRPC server's port (rerun --connect)")
+    keep_serving: bool = Field(True, description="serve: after the run, keep serving until Ctrl-C when the "
+                                                 "process has a terminal (stdin is a tty)")
     flush_frames: int | None = Field(None, ge=1, description="frames per send_columns batch; default "
                                      "1 s of frames live (spawn, serve), 2 s when saving")
     t_end: float | None = Field(None, description="s: send everything and close at this time")
@@ -150,6 +158,9 @@ class RerunSink(Component[RerunSinkParams]):
     def setup(self):
         p = self.p
         self.target = parse_target(p.target)
+        if self.target.mode == "serve":
+            self.target = dataclasses.replace(self.target, host=p.serve_host, port=p.serve_port,
+                                              grpc_port=p.grpc_port)
         robot = self.robot
         self.links = robot.links if robot is not None else ()
         # series inputs are per instance: one numeric input of any shape per signal
@@ -241,7 +252,8 @@ class RerunSink(Component[RerunSinkParams]):
 
             v.sensors = SensorLog(rec, p.sensors, point_radius=p.point_radius, intensity_range=p.intensity_range,
                                   frustum_depth=p.frustum_depth)
-        v.finalizer = weakref.finalize(v, _finish, v.log, rec, v.used_target.mode, v.used_target.path)
+        v.finalizer = weakref.finalize(v, _finish, v.log, rec, v.used_target.mode, v.used_target.path,
+                                       p.keep_serving)
         v.last_wall = time.perf_counter()
 
     def _flush_frames(self, target) -> int:
@@ -317,17 +329,44 @@ def _camera_pinholes(refs, values) -> list[str]:
             if isinstance(value, CameraFrame)]
 
 
-def _finish(log, rec, mode: str, path: str | None = None) -> None:
+def _finish(log, rec, mode: str, path: str | None = None, keep_serving: bool = True) -> None:
     log.flush()
     rec.flush()
     if mode == "save":
         rec.disconnect()                             # writes the .rrd footer
         # say what was written, and how to look at it: a save is otherwise silent
         sys.stderr.write(f"snakesim viz: wrote {path} (view it with `rerun {path}`)\n")
-    elif mode == "serve" and sys.stdin is not None and sys.stdin.isatty():
-        sys.stderr.write("snakesim viz: run finished; still serving the recording, Ctrl-C to stop\n")
-        try:
-            while True:
-                time.sleep(1.0)
-        except KeyboardInterrupt:
-            pass
+    elif mode == "serve":
+        serving = getattr(rec, "_snakesim_serving", None)
+        if serving is None:
+            return
+        if keep_serving and sys.stdin is not None and sys.stdin.isatty():
+            # at exit, once the run has printed its summary and written --out: a short run's viewer stays
+            atexit.register(_serve_until_interrupted, serving)
+        else:
+            sys.stderr.write("snakesim viz: run finished; the servers stop now (stdin is not a terminal, "
+                             "so nobody could press Ctrl-C: use --viz save FILE.rrd to keep the run)\n")
+            serving.stop()
+
+
+def _serve_until_interrupted(serving) -> None:
+    """Keep a served recording up after the run, until Ctrl-C (or SIGTERM); then stop its servers."""
+    import signal
+
+    where = serving.web_url or f"`rerun --connect {serving.url}`"
+    sys.stderr.write(f"snakesim viz: run finished; still serving the recording at {where}: "
+                     "press Ctrl-C to stop\n")
+    sys.stderr.flush()
+    old = None
+    try:
+        old = signal.signal(signal.SIGTERM, signal.default_int_handler)
+        while True:
+            time.sleep(0.5)
+    except KeyboardInterrupt:
+        sys.stderr.write("\nsnakesim viz: stopped serving\n")
+    except ValueError:                   # not the main thread: no signal handling, no waiting
+        pass
+    finally:
+        if old is not None:
+            signal.signal(signal.SIGTERM, old)
+        serving.stop()
