@@ -101,7 +101,8 @@ def attach_ros2(resolved: Resolved, registry=None, params: dict | None = None) -
     attach_brace_commands(resolved, registry, both)
     attach_sensor_bridge(resolved, registry, both)
     attach_odometry(resolved, registry, {**both, "world_frame": pub.get("world_frame", "world")})
-    attach_sim_control(resolved, {**both, "world_frame": pub.get("world_frame", "world")}, registry)
+    attach_sim_control(resolved, {**both, "world_frame": pub.get("world_frame", "world"),
+                                  "clock_rate": {**DEFAULT_RATES, **pub.get("rates", {})}["clock"]}, registry)
     return name
 
 

@@ -16,15 +16,17 @@ participant with no nodes (the 16 GUID bytes fill its gid, the 8 zero padding
 bytes read as an empty node list): harmless; the reverse would misparse, hence
 Humble by default.
 
-Each of snakesim's DDS participants announces the node of the component that
-owns it: ``/snakesim`` (the publisher), ``/snakesim_commands``,
-``/snakesim_sim_control`` and ``/snakesim_tether_commands``; ``ros2 node info
-/snakesim`` then lists the publisher's topics.
+A snakesim process is one DDS participant per domain (:class:`.transport.SharedParticipant`) hosting
+one node, ``/snakesim`` (:data:`NODE`): the publisher, the command sources, the simulation control, the
+sensor bridge and odometry all add their readers and writers to it, so ``ros2 node list`` shows one
+node and ``ros2 node info /snakesim`` lists every topic and service.
 """
 
 from __future__ import annotations
 
 TOPIC = "ros_discovery_info"
+#: the one ROS node a snakesim process shows as
+NODE = "snakesim"
 DISTROS = {"humble": "ROS2_HUMBLE", "jazzy": "ROS2_JAZZY"}
 
 
@@ -56,7 +58,7 @@ class NodeEntities:
         self.Node = ros_type("rmw_dds_common/msg/NodeEntitiesInfo", store_name=DISTROS[distro])
         self.Gid = ros_type("rmw_dds_common/msg/Gid", store_name=DISTROS[distro])
         self.size = len(self.Gid().data)
-        self.node, self.namespace = node, namespace
+        self.node, self.namespace, self.distro = node, namespace, distro
 
     def message(self, participant, readers, writers):
         """``participant``'s ParticipantEntitiesInfo: the one node, with these readers and writers."""
@@ -67,3 +69,15 @@ class NodeEntities:
                          node_entities_info_seq=[self.Node(node_namespace=self.namespace, node_name=self.node,
                                                            reader_gid_seq=[g(r) for r in readers],
                                                            writer_gid_seq=[g(w) for w in writers])])
+
+    def nodes_message(self, participant, nodes: dict):
+        """``participant``'s ParticipantEntitiesInfo with several nodes: ``nodes`` maps a node name to its
+        (readers, writers)."""
+        def g(entity):
+            return self.Gid(data=gid(entity, self.size))
+
+        return self.Info(gid=g(participant),
+                         node_entities_info_seq=[self.Node(node_namespace=self.namespace, node_name=name,
+                                                           reader_gid_seq=[g(r) for r in readers],
+                                                           writer_gid_seq=[g(w) for w in writers])
+                                                 for name, (readers, writers) in nodes.items()])

@@ -287,6 +287,11 @@ class Ros2Publisher(ClosedAfterRun, Component[Ros2PublisherParams]):
             run.now = t
             self._open(run, u)
             run.open_time = time.perf_counter() - wall
+        if not run.said:                   # once: domain, interface, topics (every component has opened by now)
+            run.said = True
+            from .qos_table import print_start
+
+            print_start(run.dds)
         wall = time.perf_counter()
         ns = int(t * 1e9 + 0.5) if t > 0 else 0
         sec, nsec = divmod(ns, 1_000_000_000)
@@ -365,6 +370,7 @@ class PublisherRun:
     rtf: tuple | None = None              # (period in ticks, writer, Float64) of /sim/real_time_factor
     rtf_last: tuple | None = None         # (sim t, wall s) at the last real-time-factor tick
     real_time_factor: float | None = None
+    said: bool = False                    # the start-of-run table printed (qos_table.print_start)
 
     def close(self) -> None:
         """Close the participant now (otherwise when the run's cache is dropped)."""

@@ -21,9 +21,12 @@ Topics (ROS 2 default QoS; types from rosbags' standard definitions, :mod:`.mess
     /sim/set_pose              geometry_msgs/PoseStamped  the robot's root link at a pose in the world frame,
                                    at rest (:mod:`.placement_requests`; with a multibody robot)
     /sim/set_joint_positions   sensor_msgs/JointState     joint angles by URDF name, those joints at rest
-    /clock       rosgraph_msgs/Clock  published once each time the run starts holding, with the time it
-                                   holds at (so a stepping client reads the exact time; the publisher's
-                                   /clock only ticks at its rate)
+    /clock       rosgraph_msgs/Clock  published as soon as the run starts holding, with the time it holds
+                                   at (so a stepping client reads the exact time; the publisher's /clock
+                                   only ticks at its rate), then again every 1/clock_rate wall s while
+                                   it holds, with that same stamp: a paused sim's /clock goes on at its
+                                   rate with a frozen time, as Gazebo's does, so a node on use_sim_time
+                                   sees the sim alive (and a late joiner gets the time at once)
 
 Services (rmw_cyclonedds' conventions, :mod:`.services`; ``ros2 service call`` works):
 
@@ -101,6 +104,9 @@ class Ros2SimControlParams(DdsEndpoint):
     world_frame: str = Field("world", description="the only frame_id /sim/set_pose accepts")
     max_age: float = Field(0.5, gt=0, description="s; a stamped request older than sim time by more is stale")
     max_abs_position: float = Field(2 * math.pi, gt=0, description="rad; a larger |joint angle| is out of range")
+    clock_rate: float = Field(100.0, ge=0, description="Hz of wall time: /clock repeated with the held time "
+                                                       "while the run holds (paused, stepping, lockstep), as "
+                                                       "the publisher's /clock rate; 0: once per hold only")
 
 
 class Ros2SimControl(ClosedAfterRun, Component[Ros2SimControlParams]):
@@ -150,6 +156,8 @@ class Ros2SimControl(ClosedAfterRun, Component[Ros2SimControlParams]):
 
             run.services = {name: ServiceServer(dds, name, srv) for name, srv in (RESET_SERVICE, PAUSE_SERVICE)}
         run.clock = dds.writer("/clock", M.Clock)
+        run.arrivals = _arrivals(dds, [r for _, _, r in run.readers] + [s.reader for s in run.services.values()]
+                                 + [r for r, _ in run.commands])
         run.dds = dds
         self.p.announce(dds, "snakesim_sim_control")              # ros2 node list (:mod:`.node_graph`)
         run.finalizer = weakref.finalize(run, dds.close)
@@ -159,6 +167,8 @@ class Ros2SimControl(ClosedAfterRun, Component[Ros2SimControlParams]):
         True when one did. ``t``: sim time, for stale stamps and the log."""
         if run.dds is None:
             self._open(run)
+        if not run.arrivals.wait(0):            # nothing arrived on any reader: one C call, not one take each
+            return False
         got = []
         for topic, typ, reader in run.readers:
             for m in reader.take(N=256):
@@ -267,6 +277,10 @@ class Ros2SimControl(ClosedAfterRun, Component[Ros2SimControlParams]):
                 self._announce(run, t)
                 run.holding, run.since = True, now
                 run.holds += 1
+                run.clock_due = now + 1.0 / self.p.clock_rate if self.p.clock_rate > 0 else math.inf
+            elif now >= run.clock_due:              # paused: /clock goes on at its rate, time frozen
+                self._announce(run, t)
+                run.clock_due = max(run.clock_due + 1.0 / self.p.clock_rate, now)
             elif self.p.hold_timeout and now - run.since > self.p.hold_timeout:
                 self.stop(f"held {now - run.since:.3g} s with no request (hold_timeout {self.p.hold_timeout:g} s)")
                 run.holding = False
@@ -293,6 +307,7 @@ class SimControlRun:
     holding: bool = False
     since: float = 0.0
     held_at: float | None = None     # sim time of the last hold
+    clock_due: float = math.inf      # wall (monotonic) s of the next held /clock
     holds: int = 0
     requests: int = 0
     pending: list = dataclasses.field(default_factory=list)   # (kind, index, values, service call) to edit
@@ -305,6 +320,7 @@ class SimControlRun:
     readers: tuple = ()
     services: dict = dataclasses.field(default_factory=dict)
     commands: tuple = ()
+    arrivals: object = None          # a WaitSet on every reader: whether anything arrived (poll)
     clock: object = None
     finalizer: object = None
 
@@ -317,3 +333,15 @@ class SimControlRun:
         if self.finalizer is not None:
             self.finalizer()
         self.finalizer, self.dds, self.commands, self.readers, self.services = None, None, (), (), {}
+
+
+def _arrivals(dds, readers):
+    """A WaitSet on ``readers`` whose ``wait(0)`` says whether any holds a sample (one call per base step
+    instead of a take per reader: ~0.8 µs against ~0.4 µs a reader)."""
+    from cyclonedds.core import InstanceState, ReadCondition, SampleState, ViewState, WaitSet
+
+    ws = WaitSet(dds.participant)
+    ws.conditions = [ReadCondition(r, SampleState.Any | ViewState.Any | InstanceState.Any) for r in readers]
+    for c in ws.conditions:          # held here: a condition collected by Python would be deleted in DDS
+        ws.attach(c)
+    return ws

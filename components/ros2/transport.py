@@ -21,9 +21,10 @@ naming the topic and the decoder's reason (rate-limited as rejections are, :mod:
 on the reader (``dropped``) and handed to the reader's ``on_malformed(topic, reason)``, by which the
 command sources count it with their rejections.
 
-Node graph: a participant can announce its endpoints as a ROS node on
-``ros_discovery_info`` (:meth:`Ros2Participant.announce`, :mod:`.node_graph`),
-so ``ros2 node list`` shows it.
+Node graph: a process has one DDS participant per domain (:class:`SharedParticipant`; each
+:class:`Ros2Participant` is a handle onto it, as rclcpp has one participant per context), which announces
+the endpoints of every component as one ROS node ``/snakesim`` on ``ros_discovery_info``
+(:meth:`Ros2Participant.announce`, :mod:`.node_graph`), so ``ros2 node list`` shows exactly one node.
 
 Network: by default traffic stays on this machine. Cyclone is configured
 (its XML, per domain, given to ``Domain``; nothing in the environment is read
@@ -51,7 +52,7 @@ from pydantic import Field
 
 from snakesim.framework import Params
 
-from .node_graph import TOPIC as DISCOVERY_TOPIC, NodeEntities
+from .node_graph import NODE, TOPIC as DISCOVERY_TOPIC, NodeEntities
 
 LOOPBACK = "127.0.0.1"
 #: highest participant index a loopback (unicast) discovery probes; ~this many processes per domain per host
@@ -146,6 +147,93 @@ def shared_domain(domain_id: int, interface: str = LOOPBACK):
         return dom
 
 
+def _delete(entity) -> None:
+    """Delete a DDS entity now (as its garbage collection would), once."""
+    from cyclonedds.core import Entity
+
+    try:
+        Entity.__del__(entity)
+    except Exception:              # noqa: BLE001 - already gone with its participant
+        pass
+
+
+class SharedParticipant:
+    """The process's one DDS participant on a domain (rclcpp has one per context): every
+    :class:`Ros2Participant` of the process on that domain is a handle onto it, so the process is one
+    participant in DDS discovery and one node, ``/snakesim``, in ``ros2 node list``; deleted when the last
+    handle goes. It owns the ``ros_discovery_info`` writer and publishes, on each change, one
+    ParticipantEntitiesInfo: its gid and, per announced node name, the readers and writers of every handle
+    that announced it (:mod:`.node_graph`)."""
+
+    def __init__(self, domain_id: int, interface: str):
+        from cyclonedds.domain import DomainParticipant
+
+        self.domain_id, self.interface = domain_id, interface
+        self.domain = shared_domain(domain_id, interface)
+        self.participant = DomainParticipant(domain_id)
+        self._lock = threading.RLock()
+        self._announced: dict[int, tuple[str, list]] = {}      # id(handle) -> (node, its entity list)
+        self._writer = None
+        self._info: NodeEntities | None = None
+        self._topic = None
+        self.handles: "weakref.WeakSet" = weakref.WeakSet()     # open Ros2Participant handles
+
+    def nodes(self) -> dict[str, tuple[list, list]]:
+        """Announced node name -> (readers, writers) of all handles that announced it."""
+        from cyclonedds.sub import DataReader
+
+        out: dict[str, tuple[list, list]] = {}
+        for node, entities in self._announced.values():
+            readers, writers = out.setdefault(node, ([], []))
+            for e in entities:
+                (readers if isinstance(e, DataReader) else writers).append(e)
+        return out
+
+    def announce(self, handle, node: str, entities: list, distro: str) -> None:
+        from cyclonedds.pub import DataWriter
+        from cyclonedds.topic import Topic
+
+        with self._lock:
+            if self._info is None:
+                self._info = NodeEntities(node, distro=distro)
+                self._topic = Topic(self.participant, DISCOVERY_TOPIC, self._info.Info)
+                self._writer = DataWriter(self.participant, self._topic, LATCHED_QOS.qos())
+            elif self._info.distro != distro:
+                raise ValueError(f"ROS 2 domain {self.domain_id}: the node graph is announced with the "
+                                 f"{self._info.distro} layout in this process, not {distro}")
+            self._announced[id(handle)] = (node, entities)
+            self._publish()
+
+    def withdraw(self, handle) -> None:
+        """``handle`` closes: its endpoints leave the next announcement. Not re-announced at once: the run's
+        components close one after the other at its end, and gids of deleted endpoints in the last
+        announcement are harmless (rmw_dds_common looks each up among the endpoints DDS discovered)."""
+        with self._lock:
+            self._announced.pop(id(handle), None)
+
+    def _publish(self) -> None:
+        self._writer.write(self._info.nodes_message(self.participant, self.nodes()))
+
+
+#: the process's shared participants by domain id (weakly: deleted with their last handle)
+_PARTICIPANTS: dict[int, weakref.ref] = {}
+
+
+def shared_participant(domain_id: int, interface: str = LOOPBACK) -> SharedParticipant:
+    """The process's :class:`SharedParticipant` on ``domain_id`` (created on first use)."""
+    with _DOMAINS_LOCK:
+        ref = _PARTICIPANTS.get(domain_id)
+        shared = ref() if ref is not None else None
+        if shared is not None and shared.interface == interface:
+            return shared
+    if shared is not None:                 # the same error shared_domain gives
+        shared_domain(domain_id, interface)
+    shared = SharedParticipant(domain_id, interface)
+    with _DOMAINS_LOCK:
+        _PARTICIPANTS[domain_id] = weakref.ref(shared)
+    return shared
+
+
 class Ros2Participant:
     """One DDS participant on ``domain_id`` with ROS 2 topic, type and QoS conventions.
 
@@ -157,17 +245,33 @@ class Ros2Participant:
     """
 
     def __init__(self, domain_id: int | None = None, interface: str = LOOPBACK):
-        from cyclonedds.domain import DomainParticipant
-
         self.domain_id = default_domain() if domain_id is None else int(domain_id)
         if not 0 <= self.domain_id <= 232:
             raise ValueError(f"ROS 2 domain id must be 0..232, got {self.domain_id}")
         self.interface = interface
-        self._domain = shared_domain(self.domain_id, interface)
-        self.participant = DomainParticipant(self.domain_id)
+        self._shared = shared_participant(self.domain_id, interface)
+        self._domain = self._shared.domain
+        self.participant = self._shared.participant
         self._topics: dict[str, object] = {}
         self._entities: list = []
         self._announcer = None
+        #: this handle's ROS 2 topic endpoints (not services): rows of :mod:`.qos_table`
+        self.endpoints: list[tuple] = []
+        self._shared.handles.add(self)
+
+    def _describe(self, direction: str, topic: str, msg_type, q: "TopicQos", dds_name: str | None) -> None:
+        if dds_name is not None:                  # a service's rq/rr topic, ros_discovery_info
+            return
+        from .qos_table import row
+
+        pkg, kind, _, name = (getattr(msg_type, "__idl_typename__", "") or "?::?::?::?").split("::")[:4]
+        row_ = row(topic, direction, f"{pkg}/{kind}/{name.rstrip('_')}", q)
+        if row_ not in self.endpoints:
+            self.endpoints.append(row_)
+
+    def shared_endpoints(self) -> list[tuple]:
+        """The endpoint rows of every open handle of this process's participant on this domain."""
+        return [r for h in list(self._shared.handles) for r in h.endpoints] if self._shared else list(self.endpoints)
 
     def _topic(self, topic: str, msg_type, dds_name: str | None = None):
         from cyclonedds.topic import Topic
@@ -183,16 +287,18 @@ class Ros2Participant:
         (a service's ``rq/``/``rr/`` topics, ``ros_discovery_info``)."""
         from cyclonedds.pub import DataWriter
 
-        w = DataWriter(self.participant, self._topic(topic, msg_type, dds_name),
-                       (qos or QOS.get(topic, DEFAULT_QOS)).qos())
+        q = qos or QOS.get(topic, DEFAULT_QOS)
+        w = DataWriter(self.participant, self._topic(topic, msg_type, dds_name), q.qos())
         self._entities.append(w)
+        self._describe("pub", topic, msg_type, q, dds_name)
         return w
 
     def reader(self, topic: str, msg_type, qos: TopicQos | None = None, dds_name: str | None = None,
                on_malformed=None):
         """A reader (:class:`Ros2Reader`: malformed samples dropped, logged and passed to ``on_malformed``)."""
-        r = _reader_class()(self.participant, self._topic(topic, msg_type, dds_name),
-                            (qos or QOS.get(topic, DEFAULT_QOS)).qos())
+        q = qos or QOS.get(topic, DEFAULT_QOS)
+        r = _reader_class()(self.participant, self._topic(topic, msg_type, dds_name), q.qos())
+        self._describe("sub", topic, msg_type, q, dds_name)
         r.ros_topic = dds_name or topic
         # a bound method is held weakly: the reader must not keep its run's state (which closes it) alive
         r.on_malformed = weakref.WeakMethod(on_malformed) if hasattr(on_malformed, "__self__") else (
@@ -200,26 +306,29 @@ class Ros2Participant:
         self._entities.append(r)
         return r
 
-    def announce(self, node: str, distro: str = "humble") -> None:
-        """Publish this participant's readers and writers as ROS node ``/<node>`` on ``ros_discovery_info``
-        (:mod:`.node_graph`: ``ros2 node list`` shows it); call again after adding endpoints. The
+    def announce(self, node: str = "snakesim", distro: str = "humble") -> None:
+        """Publish this participant's readers and writers as (part of) ROS node ``/<node>`` on
+        ``ros_discovery_info`` (:mod:`.node_graph`: ``ros2 node list`` shows it); call again after adding
+        endpoints. Every handle of the process's DDS participant (:func:`shared_participant`) that announces
+        the same node adds its endpoints to that one node, as one rclcpp node with many publishers; the
         announcement's own writer (latched, as rmw_cyclonedds makes it) is not one of the node's."""
-        from cyclonedds.pub import DataWriter
-        from cyclonedds.sub import DataReader
-
-        if self._announcer is None:
-            info = NodeEntities(node, distro=distro)
-            writer = DataWriter(self.participant, self._topic(DISCOVERY_TOPIC, info.Info, DISCOVERY_TOPIC),
-                                LATCHED_QOS.qos())
-            self._announcer = info, writer
-        info, writer = self._announcer
-        writer.write(info.message(self.participant, [e for e in self._entities if isinstance(e, DataReader)],
-                                  [e for e in self._entities if not isinstance(e, DataReader)]))
+        self._announcer = node
+        self._shared.announce(self, node, self._entities, distro)
 
     def close(self) -> None:
+        """Delete this handle's readers, writers and topics (the shared participant stays while another
+        handle holds it) and take them out of the node-graph announcement."""
+        shared, entities, topics = self._shared, list(self._entities), list(self._topics.values())
         self._announcer = None
         self._entities.clear()
         self._topics.clear()
+        if shared is not None:
+            shared.handles.discard(self)
+            shared.withdraw(self)
+            for e in entities + topics:
+                _delete(e)
+        self._shared = None
+        self.endpoints = []
         self.participant = None
         self._domain = None
 
@@ -332,7 +441,9 @@ class DdsEndpoint(Params):
                                                    "node-graph announcement uses (Humble: 24 bytes; Iron, "
                                                    "Jazzy: 16)")
 
-    def announce(self, dds: "Ros2Participant", node: str) -> None:
-        """Announce ``dds``'s endpoints as ROS node ``node`` when ``node_graph`` is on."""
+    def announce(self, dds: "Ros2Participant", component: str | None = None) -> None:
+        """Announce ``dds``'s endpoints as part of the process's one ROS node ``/snakesim``
+        (:data:`.node_graph.NODE`) when ``node_graph`` is on. ``component`` (e.g. ``snakesim_commands``)
+        names the part for the reader; every component of the process shows as the one node."""
         if self.node_graph:
-            dds.announce(node, self.ros_distro)
+            dds.announce(NODE, self.ros_distro)

@@ -13,7 +13,7 @@ def test_ros2_node_list_would_show_snakesim_with_its_topics(dds_domain):
                         ["robot-zero-g", "--set", "robot.modules=2", "--duration", "2.0", "--realtime",
                          "--ros2-domain", domain, "--quiet"], timeout=90, peer_timeout=40)
     nodes = {n["name"]: n for n in got["nodes"]}
-    assert {"snakesim", "snakesim_sim_control"} <= set(nodes), sorted(nodes)
+    assert set(nodes) == {"snakesim"}, sorted(nodes)            # one node per process (rclcpp's layout)
     node = nodes["snakesim"]
     assert node["namespace"] == "/"
     pubs = {p["key"]: p for p in got["publications"]}
@@ -23,9 +23,8 @@ def test_ros2_node_list_would_show_snakesim_with_its_topics(dds_domain):
     assert {"rt/clock", "rt/joint_states", "rt/tf", "rt/robot_description"} <= topics, sorted(topics)
     # the node's participant is the one DDS says those writers belong to
     assert {pubs[g[:32]]["participant"] for g in node["writers"] if g[:32] in pubs} == {node["participant"][:32]}
-    # the gate's node lists its readers (/sim/pause …) and its service endpoints
-    gate = nodes["snakesim_sim_control"]
-    assert gate["readers"] and any(pubs.get(g[:32], {}).get("topic") == "rr/sim/resetReply" for g in gate["writers"])
+    # the same node lists the gate's readers (/sim/pause …) and its service endpoints
+    assert node["readers"] and any(pubs.get(g[:32], {}).get("topic") == "rr/sim/resetReply" for g in node["writers"])
 
 
 def test_jazzy_layout_has_16_byte_gids():
