@@ -112,7 +112,7 @@ from snakesim.framework import Component, Input, Output, Uses
 
 from .rejection_counts import count_rejection
 from .rejections import Rejected, RejectionLog, check_stamp
-from .transport import ClosedAfterRun, DdsEndpoint
+from .transport import ClosedAfterRun, DdsEndpoint, arrivals_waitset
 
 __all__ = ["Rejected", "Ros2Commands", "Trajectory"]
 
@@ -318,11 +318,14 @@ class Ros2Commands(ClosedAfterRun, Component[Ros2CommandsParams]):
         dds = Ros2Participant(self.p.domain_id, self.p.interface)
         run.readers = tuple((topic, typ, dds.reader(topic, typ, on_malformed=run.dropped))
                             for topic, typ in self.topics())
+        run.arrivals = arrivals_waitset(dds, [r for _, _, r in run.readers])
         run.dds = dds
         self.p.announce(dds, "snakesim_commands")              # ros2 node list (:mod:`.node_graph`)
         run.finalizer = weakref.finalize(run, dds.close)
 
     def _take(self, run: "CommandsRun") -> list:
+        if not run.arrivals.wait(0):          # nothing arrived: one call, not a take per reader
+            return []
         got = []
         for topic, typ, reader in run.readers:
             for m in reader.take(N=256):
@@ -540,6 +543,7 @@ class CommandsRun:
     started: bool = False
     dds: object = None
     readers: tuple = ()
+    arrivals: object = None          # a WaitSet on the readers: whether anything arrived (_take)
     rejected: int = 0
     applied: int = 0
     last_reason: str = ""

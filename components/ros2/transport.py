@@ -419,6 +419,18 @@ def _reader_class():
     return _READER_CLASS
 
 
+def arrivals_waitset(dds: "Ros2Participant", readers):
+    """A WaitSet on ``readers`` whose ``wait(0)`` says whether any holds a sample: one call per tick
+    instead of a take per reader (~0.8 µs against ~0.4 µs a reader), for components that poll."""
+    from cyclonedds.core import InstanceState, ReadCondition, SampleState, ViewState, WaitSet
+
+    ws = WaitSet(dds.participant)
+    ws.conditions = [ReadCondition(r, SampleState.Any | ViewState.Any | InstanceState.Any) for r in readers]
+    for c in ws.conditions:          # held here: a condition collected by Python would be deleted in DDS
+        ws.attach(c)
+    return ws
+
+
 class ClosedAfterRun:
     """Mixin of the ROS 2 components: what their run opened (``u.cache.close()``: a DDS participant and its
     endpoints, a share of an MCAP file) is closed once the run has ended (Component.after_run), so a
