@@ -36,6 +36,7 @@ def builtin_components() -> tuple:
     from .sensors import ForceTorqueSensors, Imu
     from .sensors.fts_wall_loads import FtsWallLoads
     from .sensors.odometry import Odometry
+    from .sensors.terrain_map import TerrainMap
     from .tethers import Tethers, WrenchSum
     from .viz import RerunSink
     from .ros2 import Ros2Commands, Ros2Publisher, Ros2SensorBridge, Ros2SimControl, Ros2TetherCommands
@@ -48,7 +49,7 @@ def builtin_components() -> tuple:
     return (Constant, Step, Sine, Gain, Sum, ZeroOrderHold, Pendulum, ViscousDamper, PointMass, SpringDamper,
             PointContact, HullContact, TerrainSource, Multibody, ScrewSdfContact, BodyContact, ScrewDrive,
             JointPid, JointSpringDamper, JointSetpoints, SerpenoidGait, HelicalGait, CsvTrajectory, Schedule, ForceTorqueSensors, FtsWallLoads,
-            Imu, Odometry, Tethers, WrenchSum, MobilityMonitor, VerticalMobilityEvaluation, TraverseEvaluation, TerrainClearance, JointLimits, BraceClimb, RerunSink, PlanarPose, ScrewSchedule, Ros2Publisher,
+            Imu, Odometry, TerrainMap, Tethers, WrenchSum, MobilityMonitor, VerticalMobilityEvaluation, TraverseEvaluation, TerrainClearance, JointLimits, BraceClimb, RerunSink, PlanarPose, ScrewSchedule, Ros2Publisher,
             Ros2Commands, Ros2SensorBridge, Ros2SimControl, Ros2McapRecorder, Ros2SensorMcap, Ros2TetherCommands,
             Ros2GaitCommands, Ros2BraceCommands, Ros2Odometry, Ros2OdometryMcap, *PLACEMENT, *PERCEPTION)
 
@@ -77,11 +78,24 @@ def snakesim_add_commands(cli):
 def snakesim_run_options():
     # one group, in the order the options always had: the viewer, ROS 2, its recorder, the sensors
     from .perception.cli import perception_run_options
+    from .sensors.cli import sensors_run_options
     from .ros2.cli import ros2_run_options
     from .ros2.mcap_cli import ros2_mcap_run_options
     from .viz.cli import viz_run_options
 
-    return [*viz_run_options(), *ros2_run_options(), *ros2_mcap_run_options(), *perception_run_options()]
+    return [*viz_run_options(), *ros2_run_options(), *ros2_mcap_run_options(), *perception_run_options(),
+            *sensors_run_options(), terrain_run_option()]
+
+
+def terrain_run_option():
+    # --terrain is the shorthand --set terrain=... (snakesim_cli_shorthands); given, the robot is also put
+    # on the new terrain, or the run refused with the reason (placement/terrain_swap.py): one rule, every kind
+    import click
+
+    from .placement.terrain_swap import apply_terrain_option
+
+    return (click.Option(["--terrain", "terrain"], default=None, help="Terrain: a name in terrains/ or a YAML/mesh "
+                         "path; the robot is placed on it"), apply_terrain_option)
 
 
 @hookimpl

@@ -275,6 +275,7 @@ class Ros2McapRecorder(Ros2Publisher):
         f = run.dds = McapFile.shared(Path(p.path), p.chunk_size, p.flush_period)
         run.finalizer = weakref.finalize(run, f.release)     # also at interpreter exit
         run.writer = f.writer
+        run.said = True                 # a file, not a DDS endpoint: no start print of domain and topics
         writers = {}
         for key, entry in run.templates.items():
             if key not in self.topic_rates:

@@ -102,11 +102,39 @@ class Ros2SensorBridge(ClosedAfterRun, Component[Ros2SensorBridgeParams]):
 
     # -- publishing -----------------------------------------------------------------------------
     def before_run(self, t0, u):
-        """The DDS participant and /tf_static, opened before the clock starts."""
+        """The DDS participant, /tf_static and every configured sensor topic's writer, opened before the clock
+        starts (so they are in the ``--ros2`` start print and the node's announcement from the start). A
+        sensor's kind (lidar: B/points; camera: B/image_raw, B/depth, B/camera_info) is its sample's type when
+        one is already on the input, else its port's name (a lidar's ``scan``; a camera's ``frame``, a stereo
+        pair's ``left``/``right``), else an optical mount; a sensor none of these tells gets its writers at
+        its first sample, as before."""
+        from . import sensor_messages as SM
+
         run = u.cache
         if run.dds is None:
             run.now = t0
             self._open(run)
+        topics = {"lidar": (("points", SM.POINT_CLOUD2),),
+                  "camera": (("image_raw", SM.IMAGE), ("depth", SM.IMAGE), ("camera_info", SM.CAMERA_INFO))}
+        for i, (ref, base) in enumerate(zip(self.p.sensors, self.bases)):
+            kind = self._sensor_kind(ref, getattr(u, sensor_input_name(i), None))
+            for suffix, ros_name in topics.get(kind, ()):
+                self._writer(run, f"{base}/{suffix}", ros_name)
+
+    def _sensor_kind(self, ref: str, sample) -> str | None:
+        """'lidar', 'camera' or None (not known before its first sample): see :meth:`before_run`."""
+        from snakesim.components.perception import CameraFrame, LidarScan
+
+        if isinstance(sample, LidarScan):
+            return "lidar"
+        if isinstance(sample, CameraFrame):
+            return "camera"
+        comp, _, port = ref.partition(".")
+        by_port = {"scan": "lidar", "frame": "camera", "left": "camera", "right": "camera"}
+        if port in by_port:
+            return by_port[port]
+        mount = self.p.mounts.get(comp)
+        return "camera" if mount is not None and mount.optical else None
 
     def _open(self, run: "BridgeRun") -> None:
         from .messages import typestore

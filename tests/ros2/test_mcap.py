@@ -114,3 +114,16 @@ def test_a_killed_run_leaves_a_readable_file(dds_domain, tmp_path):
     assert counts["/joint_states"] > 10 and counts["/clock"] >= counts["/joint_states"] and counts["/tf"] > 5
     clock = [m[1].clock.sec + 1e-9 * m[1].clock.nanosec for m in got["/clock"]]
     assert all(b > a for a, b in zip(clock, clock[1:]))
+
+
+def test_ros2_mcap_without_quiet_runs_and_prints_the_ros2_table_once(tmp_path):
+    """The recorder shares the publisher's tick; the start print (domain, topics) is the DDS endpoint's,
+    not the file's: a run with --ros2-mcap and no --quiet completes and the table is printed once."""
+    import subprocess
+    import sys
+
+    path = tmp_path / "run.mcap"
+    p = subprocess.run([sys.executable, "-c", "from snakesim.framework.cli import main; main()", "run", "pendulum",
+                        "--duration", "0.1", "--ros2-mcap", str(path)], capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr[-2000:]
+    assert p.stderr.count("ROS 2: domain") == 1 and path.stat().st_size > 0
