@@ -1,7 +1,7 @@
 """Signal log filled in fixed-size chunks, streamed to its CSV form as they fill.
 
 Columns: ``t``, then one per element of each recorded port, named
-``component.port`` (scalar), ``component.port[i]`` / ``[i,j]`` (arrays) or
+``component.port`` (scalar), ``component.port[i]`` / ``[i][j]`` (arrays; no comma, so the CSV header splits as the rows do) or
 ``component.port.name`` when the port declares element names. Values are
 written with 17 significant digits, which round-trips float64 exactly, so the
 same run gives a bit-identical file (chunked or not: ``savetxt`` formats row by row).
@@ -47,7 +47,8 @@ def column_names(ref: PortRef, shape: tuple, names) -> list[str]:
         return [base]
     if names is not None and len(names) == int(np.prod(shape)):
         return [f"{base}.{n}" for n in names]
-    return [f"{base}[{','.join(map(str, idx))}]" for idx in np.ndindex(*shape)]
+    # [i][j], not [i,j]: a comma in a name would split the CSV header's column
+    return [f"{base}{''.join(f'[{i}]' for i in idx)}" for idx in np.ndindex(*shape)]
 
 
 #: rows per chunk (8192 rows of 10 columns: 640 kB) ...

@@ -113,3 +113,25 @@ def test_a_run_killed_midway_keeps_its_signals_up_to_the_last_flush(tmp_path):
     assert data.shape == (n, len(header.split(","))) and np.isfinite(data).all()
     dt = data[1, 0] - data[0, 0]
     np.testing.assert_allclose(data[:, 0], np.arange(n) * dt, rtol=0, atol=1e-9 * n)
+
+
+def test_a_two_dimensional_port_names_its_columns_without_commas(tmp_path):
+    """An unnamed (2, 3) port: columns comp.port[i][j], so the CSV header splits into as many columns as
+    every row has values (a comma inside a name split it into more)."""
+    from snakesim.framework import Builder, Component, Output
+
+    class Grid(Component):
+        type_name = "grid_2d_test"
+        time_invariant = True
+        cells = Output(shape=(2, 3), unit="1")
+
+        def output(self, t, x, u, y):
+            y.cells[:] = np.arange(6.0).reshape(2, 3)
+
+    b = Builder(dt=0.1, duration=0.3)
+    g = b.add(Grid("g"))
+    b.record(g.out.cells)
+    b.build().run(out_dir=None).log.write_csv(tmp_path / "s.csv")
+    header, first = (tmp_path / "s.csv").read_text().splitlines()[:2]
+    assert header.split(",") == ["t", *(f"g.cells[{i}][{j}]" for i in range(2) for j in range(3))]
+    assert len(first.split(",")) == len(header.split(","))
