@@ -139,6 +139,18 @@ class RobotModel:
         except KeyError:
             raise KeyError(f"no link '{link}' in {self.label}; links: {', '.join(self.links)}") from None
 
+    def mounted_link(self, link: str | None, owner: str) -> tuple[str, int]:
+        """(name, row) of the link a sensor named ``owner`` sits on: ``link``, or the URDF root when None;
+        an unknown name or a pattern is an error naming the owner's ``link`` key and the valid links."""
+        from snakesim.components.control.joint_selection import match
+
+        name = link if link is not None else self.tree.root
+        if name not in self.link_row:
+            match(self.links, name, f"{owner}: link")      # raises, listing the links
+            raise ValueError(f"{owner}: link must name one link, not a pattern: '{name}'; valid: "
+                             f"{', '.join(self.links)}")
+        return name, self.link_row[name]
+
     def kind_of(self, joint: str) -> str:
         """bend | twist | screw | other of a joint: the metadata's declaration, else its name's prefix."""
         return joint_kind(joint, self.metadata)

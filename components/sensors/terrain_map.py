@@ -55,7 +55,6 @@ import math
 import numpy as np
 from pydantic import Field, model_validator
 
-from snakesim.components.control.joint_selection import match
 from snakesim.components.multibody.robot_model import RobotModel
 from snakesim.components.multibody.robot_ports import link_shape
 from snakesim.components.port_roles import LINK_POSES
@@ -225,14 +224,7 @@ class TerrainMap(Component[TerrainMapParams]):
 
     def setup(self):
         p = self.p
-        links = self.robot.links
-        link = p.link if p.link is not None else self.robot.tree.root
-        if link not in links:
-            match(links, link, f"{self.name}: link")      # raises, listing the links
-            raise ValueError(f"{self.name}: link must name one link, not a pattern: '{link}'; valid: "
-                             f"{', '.join(links)}")
-        self.link = link
-        self._i = self.robot.link_index(link)
+        self.link, self._i = self.robot.mounted_link(p.link, self.name)
         if self.rate is None:
             self.rate = DEFAULT_RATE
         n = self.grid_shape[0]
