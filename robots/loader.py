@@ -48,7 +48,8 @@ def load_robot(design: str, modules: int | None = None, head: bool | None = None
     candidate = parse_structure(text, str(path))
     baseline = parse_structure(generated.urdf, f"{generated.design} baseline")
     label = f"{generated.design} ({generated.modules} module{'s' if generated.modules != 1 else ''})"
-    check_structure(candidate, baseline, str(path), label)
+    check_structure(candidate, baseline, str(path), label,
+                    hint=lambda: _module_count_hint(design, generated, candidate, str(path), head, params))
     metadata = generated.metadata
     side = sidecar_path(path)
     if side is not None:
@@ -59,3 +60,27 @@ def load_robot(design: str, modules: int | None = None, head: bool | None = None
         check_against_urdf(declared, parse_urdf(text, str(path)), str(side))
         metadata = {**generated.metadata, **declared}
     return replace(generated, urdf=text, urdf_path=path.resolve(), source="user", metadata=metadata)
+
+
+def _module_count_hint(design: str, generated: RobotDescription, candidate, source: str, head, params) -> str | None:
+    """"FILE has the structure of DESIGN with N modules: add --modules N" when it does. A design's link count
+    is linear in its modules (two descriptions give the line), so one more description checks the only
+    count that could match."""
+    from .registration import robot_design
+    from .structure import structural_differences
+
+    try:
+        d = robot_design(design)
+        one, two = (parse_structure(d.describe(n, head, **params).urdf, design) for n in (1, 2))
+        per = len(two.links) - len(one.links)
+        if per <= 0 or (len(candidate.links) - len(one.links)) % per:
+            return None
+        n = 1 + (len(candidate.links) - len(one.links)) // per
+        if n < 1 or n == generated.modules:
+            return None
+        if structural_differences(candidate, parse_structure(d.describe(n, head, **params).urdf, design)):
+            return None
+    except (ValueError, KeyError):            # a count the design does not take: no hint
+        return None
+    return (f"{source} has the structure of {design} with {n} modules (the scene's robot has "
+            f"{generated.modules}): add --modules {n}")

@@ -33,12 +33,13 @@ class StructureMismatchError(ValueError):
     lists them all.
     """
 
-    def __init__(self, source: str, baseline: str, differences: list[str]):
+    def __init__(self, source: str, baseline: str, differences: list[str], hint: str | None = None):
         self.source = source
         self.baseline = baseline
         self.differences = list(differences)
+        self.hint = hint
         lines = "\n".join(f"  - {d}" for d in self.differences)
-        super().__init__(f"{source} differs in structure from {baseline}:\n{lines}")
+        super().__init__((f"{hint}\n" if hint else "") + f"{source} differs in structure from {baseline}:\n{lines}")
 
 
 @dataclass(frozen=True)
@@ -169,11 +170,13 @@ def structural_differences(candidate: UrdfStructure, baseline: UrdfStructure) ->
     return out
 
 
-def check_structure(candidate: UrdfStructure, baseline: UrdfStructure, source: str, baseline_label: str) -> None:
-    """Raise :class:`StructureMismatchError` listing every difference, if any."""
+def check_structure(candidate: UrdfStructure, baseline: UrdfStructure, source: str, baseline_label: str,
+                    hint=None) -> None:
+    """Raise :class:`StructureMismatchError` listing every difference, if any; ``hint()`` (called only
+    then) may give a first line saying what would match."""
     differences = structural_differences(candidate, baseline)
     if differences:
-        raise StructureMismatchError(source, baseline_label, differences)
+        raise StructureMismatchError(source, baseline_label, differences, hint() if hint else None)
 
 
 def _membership(kind: str, candidate: list[str] | tuple[str, ...], baseline: list[str] | tuple[str, ...]) -> list[str]:

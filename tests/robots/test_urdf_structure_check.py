@@ -105,7 +105,8 @@ def test_module_count_and_head_are_part_of_the_baseline(tmp_path):
     with pytest.raises(StructureMismatchError) as caught:
         load_robot("eels-1.0", modules=3, urdf=path)
     assert "link 'module_03': not in the baseline" in caught.value.differences
-    assert str(caught.value).startswith(f"{path} differs in structure from eels-1.0 (3 modules):")
+    first, second = str(caught.value).splitlines()[:2]
+    assert first.endswith("add --modules 4") and second == f"{path} differs in structure from eels-1.0 (3 modules):"
     with pytest.raises(StructureMismatchError) as caught:
         load_robot("eels-1.0", modules=4, head=False, urdf=path)
     assert "link 'imu': not in the baseline" in caught.value.differences
@@ -152,3 +153,20 @@ def test_unreadable_urdfs(tmp_path, text, fragment):
         load_robot("mini-eels-1.0", urdf=path)
     assert str(caught.value).startswith(str(path))
     assert fragment in str(caught.value)
+
+
+def test_a_urdf_of_another_module_count_is_named_with_the_count_to_give(tmp_path):
+    """A URDF generated with 3 modules, loaded for 5: the error's first line says which --modules matches;
+    a URDF that matches no count (a joint retyped) gets the differences without that line."""
+    path = write(tmp_path, baseline_tree(modules=3))
+    with pytest.raises(StructureMismatchError) as e:
+        load_robot("eels-1.0", modules=5, urdf=path)
+    assert e.value.hint is not None and str(e.value).splitlines()[0].endswith("add --modules 3")
+    assert "(the scene's robot has 5)" in e.value.hint
+    load_robot("eels-1.0", modules=3, urdf=path)                  # and that count loads it
+
+    root = baseline_tree(modules=3)
+    next(j for j in root.iter("joint") if j.get("type") == "revolute").set("type", "continuous")
+    with pytest.raises(StructureMismatchError) as e:
+        load_robot("eels-1.0", modules=5, urdf=write(tmp_path, root, "other.urdf"))
+    assert e.value.hint is None and "--modules" not in str(e.value)
