@@ -58,7 +58,7 @@ def test_serve_binds_loopback_and_stops():
     """A short-lived server: both ports on 127.0.0.1, closed again by stop()."""
     import rerun as rr
 
-    from snakesim.components.viz.target import VizTarget, check_serve_ports, serve
+    from snakesim.components.viz.target import VizTarget, VizTargetError, check_serve_ports, serve
 
     target = VizTarget("serve", port=_free_port(), grpc_port=_free_port())
     said = []
