@@ -54,6 +54,7 @@ def pool_run(plan, tmp_path_factory):
     return out, res
 
 
+@pytest.mark.slow
 def test_failing_runs_are_recorded_with_their_reason_and_the_campaign_goes_on(pool_run):
     out, res = pool_run
     rows = res["table"].to_pylist()
@@ -70,6 +71,7 @@ def test_failing_runs_are_recorded_with_their_reason_and_the_campaign_goes_on(po
     assert (out / "scatter.png").exists() and (out / "sensitivity.csv").exists()
 
 
+@pytest.mark.slow
 def test_dask_local_cluster_gives_the_same_table_as_the_local_pool(plan, pool_run, tmp_path):
     with dask_local(2) as backend:
         res = run_campaign(plan, tmp_path, backend, quiet=True)

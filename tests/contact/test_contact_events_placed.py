@@ -39,6 +39,7 @@ DURATION = 1.5            # s: the brace is back on both walls within ~0.1 s and
 RISE = 1e-4
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("where", list(WALL_SCENES))
 def test_a_braced_robot_started_off_a_wall_lands_on_it_and_rests_where_the_reference_does(where):
     scene = WALL_SCENES[where]

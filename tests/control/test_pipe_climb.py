@@ -58,6 +58,7 @@ def test_the_ring_holds_then_climbs_with_net_progress_every_cycle(climb):
     assert ev["vertical_distance"]["net_m"] == pytest.approx(h[-1], abs=0.01)
 
 
+@pytest.mark.slow
 def test_rosenbrock_w_at_2_ms_climbs_as_rk4_at_half_a_millisecond():
     """The body contact's Jacobian lets rosenbrock_w take 4× RK4's step: the net climb after 3 s of rolling agrees
     within 10 % (measured 0.217 m and 0.229 m; rosenbrock_w at 1 ms 0.221 m). RK4 at 1 ms is off by +40 % (the

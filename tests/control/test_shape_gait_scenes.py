@@ -33,6 +33,7 @@ def late_velocity(t, com, after):
     return np.array([np.polyfit(t[late], com[late, j], 1)[0] for j in range(2)])
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("along, across, expect_sign", [(0.5, 2.0, -1.0), (2.0, 0.5, 1.0)])
 def test_mini_eels_crawl_speed_matches_the_resistive_force_reference(along, across, expect_sign):
     """mini-eels-crawl at 0.25 Hz against serpenoid_speed for the same chain, gait and friction.

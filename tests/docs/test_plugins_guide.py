@@ -91,6 +91,7 @@ def _install_and_test(files: dict[str, str], tmp_path: Path, folder: str):
     return site, env, [sys.executable, "-c", "from snakesim.framework.cli import main; main()"], work
 
 
+@pytest.mark.slow
 def test_the_printed_plugin_installs_and_passes_its_tests(tmp_path):
     site, env, snakesim, work = _install_and_test(_component_plugin_files(), tmp_path, "snakesim-demo-plugin")
     assert (site / "snakesim_demo_plugin" / "lowpass.py").is_file()
@@ -113,6 +114,7 @@ def _quat_matrix(q) -> np.ndarray:
                      [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
 
 
+@pytest.mark.slow
 def test_the_printed_terrain_kind_installs_and_every_consumer_sees_it(tmp_path):
     pytest.importorskip("rerun")
     import xml.etree.ElementTree as ET
@@ -165,6 +167,7 @@ def test_the_printed_terrain_kind_installs_and_every_consumer_sees_it(tmp_path):
     assert (np.linalg.norm(p - center, axis=1) - radius < p[:, 2] - 1e-3).sum() > 20     # some on the dome
 
 
+@pytest.mark.slow
 def test_the_printed_robot_design_installs_and_runs_in_a_scene(tmp_path):
     import xml.etree.ElementTree as ET
 

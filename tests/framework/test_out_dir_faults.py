@@ -49,6 +49,7 @@ def last_time(path: Path) -> float:
         return -1.0
 
 
+@pytest.mark.slow
 def test_two_runs_on_one_folder_one_refuses_naming_the_other(tmp_path):
     out = tmp_path / "run"
     # --realtime: each run holds the folder for 2 s, so the two overlap whatever their start-up times
@@ -67,6 +68,7 @@ def test_two_runs_on_one_folder_one_refuses_naming_the_other(tmp_path):
     assert not (out / LOCK_FILE).exists()                            # the claim is released at the end
 
 
+@pytest.mark.slow
 def test_a_killed_run_keeps_its_rows_says_it_is_incomplete_and_its_claim_is_taken_over(tmp_path):
     out = tmp_path / "run"
     p = run_cli("pendulum", "--duration", 60, "--realtime", "--out", out, "--quiet")

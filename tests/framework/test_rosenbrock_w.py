@@ -305,6 +305,7 @@ def test_error_control_tightens_the_error_with_the_tolerance(tmp_path, reg, meth
     assert steps == sorted(steps) and steps[-1] > steps[0], steps
 
 
+@pytest.mark.slow
 def test_error_control_finds_the_explicit_limit_of_an_undeclared_stiff_term(tmp_path, reg):
     """An oscillator that declares nothing is integrated explicitly by the W-method; at ω h = 50 fixed steps
     blow up (|R| > 1), while error control shrinks the step below the explicit stability limit and keeps the

@@ -48,6 +48,7 @@ def _data_files(root: Path) -> set[str]:
     return out
 
 
+@pytest.mark.slow
 def test_wheel_installs_and_finds_its_data(scratch):
     src = copy_project(scratch / "src")
     wheel = build_wheel(src, scratch / "dist")

@@ -45,6 +45,7 @@ def plugin_venv(scratch):
     return venv, python
 
 
+@pytest.mark.slow
 def test_installed_plugin_registers_and_runs(plugin_venv, scratch):
     venv, python = plugin_venv
     work = scratch / "work"

@@ -123,6 +123,7 @@ def test_eels15_settles_with_every_screw_within_1mm(scene, duration):
     assert r[P + "settle.settle_time"][-1, 0] == pytest.approx(T[latched[0]], abs=2e-3)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("scene, duration, need", [("placement-u-channel", 0.6, 4), ("placement-dem", 4.5, 6)])
 def test_settles_in_u_channel_and_on_dem(scene, duration, need):
     # DEM: EELS 1.0's two screws per module are one rigid body, so the scene asks 6 of 8 in the band

@@ -50,6 +50,7 @@ def test_validate_names_the_field():
     assert list(back) == ["target_force"] and math.isnan(back["target_force"])
 
 
+@pytest.mark.slow
 def test_speed_commands_change_the_climb_rate(dds_domain, tmp_path):
     topic, typ = "/brace/parameters", "ParameterEvent"
     script = [{"at": CHANGE_AT - 0.3, "topic": topic, "type": typ, "msg": m} for m, _ in MALFORMED]

@@ -58,6 +58,7 @@ def dominant_frequency(t, q):
     return float(grid[int(np.argmin(res))])
 
 
+@pytest.mark.slow
 def test_frequency_command_changes_the_joint_motion(dds_domain, tmp_path):
     topic, typ = "/gait/parameters", "ParameterEvent"
     script = [{"at": CHANGE_AT - 0.3, "topic": topic, "type": typ, "msg": m} for m, _ in MALFORMED]

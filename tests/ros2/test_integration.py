@@ -10,6 +10,7 @@ RATE = 50.0           # Hz, /joint_states and /clock as set on the command line
 DURATION = 1.0        # s simulated
 
 
+@pytest.mark.slow
 def test_joint_states_at_the_set_rate_and_clock_advancing(dds_domain):
     from snakesim.components.multibody.robot_model import RobotModel
 
@@ -60,6 +61,7 @@ def _accel(samples, t0, t1):
     return 2 * np.polyfit(pts[:, 0] - t0, pts[:, 1], 2)[0]
 
 
+@pytest.mark.slow
 def test_commands_move_joints_toggle_gravity_and_malformed_are_rejected(dds_domain, tmp_path):
     """A separate commander sets a joint, sees it move in /joint_states, turns gravity off and sees the fall
     stop accelerating in /tf, sends every kind of malformed command and sees publishing go on (the joint

@@ -90,6 +90,7 @@ def test_recording_decodes_with_the_published_topics_types_counts_and_bytes(dds_
     prun.close()
 
 
+@pytest.mark.slow
 def test_a_killed_run_leaves_a_readable_file(dds_domain, tmp_path):
     path = tmp_path / "killed.mcap"
     exe = Path(sys.executable).with_name("snakesim")

@@ -152,6 +152,7 @@ def _recover_cli(*args):
     return CliRunner().invoke(cli, ["mcap", "recover", *map(str, args)])
 
 
+@pytest.mark.slow
 def test_a_killed_run_is_recovered_with_every_channel(dds_domain, tmp_path):
     from mcap.reader import make_reader
 

@@ -7,6 +7,7 @@ import pytest
 from ros2_peer import run_beside
 
 
+@pytest.mark.slow
 def test_ros2_node_list_would_show_snakesim_with_its_topics(dds_domain):
     domain = dds_domain()
     got, _ = run_beside(("graph_listener.py", domain, 30),

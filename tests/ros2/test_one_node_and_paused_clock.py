@@ -5,9 +5,12 @@ the QoS table comes from the code."""
 
 import json
 
+import pytest
+
 from ros2_peer import run_beside
 
 
+@pytest.mark.slow
 def test_one_node_snakesim_with_every_topic(dds_domain):
     domain = dds_domain()
     got, _ = run_beside(("graph_listener.py", domain, 30),
@@ -29,6 +32,7 @@ def test_one_node_snakesim_with_every_topic(dds_domain):
     assert others == {node["participant"][:32]}
 
 
+@pytest.mark.slow
 def test_paused_clock_keeps_publishing_the_held_stamp(dds_domain):
     domain = dds_domain()
     script = [{"at": 0.0, "sleep": 1.0},
@@ -48,6 +52,7 @@ def test_paused_clock_keeps_publishing_the_held_stamp(dds_domain):
     assert max(ns for _, ns in got["clock"]) >= 0.29e9
 
 
+@pytest.mark.slow
 def test_start_print_names_domain_interface_and_topics(dds_domain, tmp_path):
     import subprocess
 

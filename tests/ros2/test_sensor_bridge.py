@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from ros2_peer import run_beside
 
@@ -30,6 +31,7 @@ connections:
 """
 
 
+@pytest.mark.slow
 def test_point_clouds_images_and_camera_info_reach_a_separate_process(dds_domain, tmp_path):
     domain = dds_domain()
     scene = tmp_path / "sensors.yaml"

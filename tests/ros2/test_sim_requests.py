@@ -73,6 +73,7 @@ def _robot_x(s):
     return sl.x
 
 
+@pytest.mark.slow
 def test_reset_by_service_and_topic_returns_the_world_to_x0_exactly_while_time_runs_on(tmp_path, registry, dds_domain):
     domain = dds_domain()
     s = _session(tmp_path, registry, domain, duration=1.0)
@@ -132,6 +133,7 @@ MALFORMED_JOINTS = [
 ]
 
 
+@pytest.mark.slow
 def test_set_pose_and_joint_positions_land_exactly_and_bad_requests_are_rejected(tmp_path, registry, dds_domain,
                                                                                  caplog):
     domain = dds_domain()
@@ -191,6 +193,7 @@ def test_set_pose_and_joint_positions_land_exactly_and_bad_requests_are_rejected
     assert r.log["robot.joint_q.screw_front_00"][i] == pytest.approx(2.5, abs=1e-12)
 
 
+@pytest.mark.slow
 def test_pause_service_and_reset_while_paused(tmp_path, registry, dds_domain):
     """SetBool pauses (the run holds within one control period, /clock stands still), a reset while paused
     lets exactly one base step through (the one that takes the initial state) and holds again; SetBool false

@@ -40,6 +40,7 @@ MALFORMED = [
 ]
 
 
+@pytest.mark.slow
 def test_releasing_the_tether_drops_the_tension_to_zero_and_the_robot_falls(dds_domain, tmp_path):
     script = [{"at": RELEASE_AT - 0.1, "topic": "/tethers/attached", "type": "UInt8MultiArray", "msg": m}
               for m, _ in MALFORMED]

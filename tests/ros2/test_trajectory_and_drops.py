@@ -7,6 +7,7 @@ import csv
 import json
 
 import numpy as np
+import pytest
 
 from ros2_peer import run_beside
 
@@ -20,6 +21,7 @@ def _signals(path):
     return rows[0], np.array(rows[1:], dtype=float)
 
 
+@pytest.mark.slow
 def test_gravity_off_on_and_a_drop_from_0_6_m_keep_the_run_and_the_robot_rests_on_the_ice(dds_domain, tmp_path):
     domain = dds_domain()
     script = [{"at": 0.4, "topic": "/enable_gravity", "type": "Bool", "msg": {"data": False}},
@@ -50,6 +52,7 @@ def test_gravity_off_on_and_a_drop_from_0_6_m_keep_the_run_and_the_robot_rests_o
     assert np.all(d[end][:, force].sum(axis=1) > 0.9 * weight)
 
 
+@pytest.mark.slow
 def test_a_trajectory_from_another_process_is_followed_from_the_state(dds_domain):
     domain = dds_domain()
     got, _ = run_beside(("trajectory_peer.py", domain, "bend_01", 60),

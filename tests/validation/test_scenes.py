@@ -115,6 +115,7 @@ def test_u_channel_settles_onto_the_floor_then_holds_and_turns_its_screws():
     assert v[late].mean() == pytest.approx(3.0, rel=0.1)
 
 
+@pytest.mark.slow
 def test_moulin_settles_onto_the_wall_and_the_short_helix_gets_no_squeeze():
     s, r = run("moulin", [], {"duration": 4.2})
     i = _settled(s, r)

@@ -59,6 +59,7 @@ def test_braced_before_the_drive_and_inside_the_channel_throughout(traverse):
     assert (np.abs(com[:, 1]) < HALF_WIDTH).all() and (com[:, 2] > 0.0).all()
 
 
+@pytest.mark.slow
 def test_the_scene_starts_where_its_placement_ends():
     """q, tail pose and latched torques of u-channel-brace-traverse.yaml are the end of
     placement-u-channel-brace.yaml (braced, wedged, gravity on): rerunning the placement reproduces them to the
