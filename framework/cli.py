@@ -200,6 +200,7 @@ def run(assembly, config, sets, duration, dt, integrator, realtime, out_dir, ove
     SIGTERM ends the run at the next step and still writes --out (the summary says it was interrupted,
     and when), exit 128 + signal; a second one stops at once."""
     from .run_files import check_writable_file, prepare_out_dir, release_out_dir
+    from .warm_up import FIRST_COMPILE_S, kernels_cached
 
     with _Interrupts() as interrupts:
         try:
@@ -208,6 +209,9 @@ def run(assembly, config, sets, duration, dt, integrator, realtime, out_dir, ove
                 prepare_out_dir(out_dir, overwrite=bool(overwrite))
             if save_config:
                 check_writable_file(save_config, "--save-config")
+            if not quiet and not kernels_cached():
+                click.echo(f"compiling kernels, once: about {FIRST_COMPILE_S} s (numba caches them for every later "
+                           "run; the run's clock starts after)", err=True)
             s = _session(assembly, config, sets, shorthands, duration=duration, dt=dt, integrator=integrator,
                          realtime=realtime)
             interrupts.attach(s)
