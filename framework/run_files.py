@@ -26,6 +26,7 @@ import socket
 from pathlib import Path
 
 from .errors import SnakesimError
+from .output_files import OutputError, write_file
 
 #: what a run writes into its --out folder (write_run)
 RUN_FILES = ("signals.csv", "summary.json", "config.yaml", "last_good_state.npz")
@@ -111,6 +112,25 @@ def in_progress_summary(source: str) -> dict:
                            "killed (signals.csv holds the rows flushed before that)",
             "pid": os.getpid(), "host": socket.gethostname(),
             "started": datetime.datetime.now().astimezone().isoformat(timespec="seconds")}
+
+
+def error_summary(source: str, error: BaseException) -> dict:
+    """summary.json's content for a run that an error ended before it could write its own (a writer on a
+    full disk, an exception out of a component): a failure with no kind (``snakesim run`` exits 1), the
+    error named, so no reader takes the folder for a run still under way."""
+    return {"outcome": "failure", "completed": False, "failure_kind": None, "source": source,
+            "stop_reason": f"the run ended with an error: {type(error).__name__}: {error}",
+            "error": f"{type(error).__name__}: {error}",
+            "ended": datetime.datetime.now().astimezone().isoformat(timespec="seconds")}
+
+
+def write_error_summary(out_dir, source: str, error: BaseException) -> None:
+    """Replace the in-progress summary.json with :func:`error_summary` (best effort: the error may be the
+    very disk this cannot write to; the in-progress summary then stands, which still reads as unfinished)."""
+    try:
+        write_file(Path(out_dir) / "summary.json", json.dumps(error_summary(source, error), indent=2) + "\n")
+    except OutputError:
+        pass
 
 
 def prepare_out_dir(path, overwrite: bool = False, option: str = "--out") -> Path:

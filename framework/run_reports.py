@@ -8,6 +8,12 @@ simulator's summary so far (read it, do not change it), and puts a non-empty res
 ``format_report(report) -> list[str]``: the CLI prints those lines at the end of
 ``snakesim run`` (otherwise a compact JSON line). A report that raises is recorded as
 ``{"error": "..."}``, never failing the run. Pruned components are not asked.
+
+A component that defines ``write_files(cache, out_dir) -> list[str]`` writes its own files into a
+run's ``--out`` folder (a deformable terrain's state and a picture of its rut): called once the run has
+ended, before the summary is written, which lists them under ``summary["files"][component name]``
+(names relative to the folder). Unlike a report, a file that cannot be written fails the run: the user
+asked for it (an OutputError naming the file; framework/output_files.py's writers).
 """
 
 from __future__ import annotations
@@ -49,3 +55,16 @@ def report_lines(plan, summary: dict) -> list[str]:
             body = [f"(report not formatted: {type(e).__name__}: {e})"]
         lines += [f"{name}:"] + [f"  {ln}" for ln in body]
     return lines
+
+
+def write_component_files(plan, out_dir, summary: dict) -> None:
+    """Call each component's ``write_files(cache, out_dir)``; list what each wrote in ``summary["files"]``."""
+    files = {}
+    for name, comp in plan.components.items():
+        fn = getattr(comp, "write_files", None)
+        if callable(fn):
+            written = fn(plan.caches.get(name), out_dir)
+            if written:
+                files[name] = [str(w) for w in written]
+    if files:
+        summary["files"] = files

@@ -13,9 +13,9 @@ from .errors import ConfigError, SnakesimError
 from .builder import Builder
 from .plan import Plan
 from .registry import Registry, default_registry
-from .run_reports import add_reports
+from .run_reports import add_reports, write_component_files
 from .validation_errors import config_error
-from .run_files import in_progress_summary, prepare_out_dir, release_out_dir
+from .run_files import in_progress_summary, prepare_out_dir, release_out_dir, write_error_summary
 from .simulator import RunResult, Simulator, write_run
 from .warm_up import close_after_run, open_before_run, warm_up
 from .yaml_source import dump_yaml
@@ -88,6 +88,7 @@ class Session:
             except OSError as e:
                 release_out_dir(out_dir)
                 raise SnakesimError(f"could not write the run to {out_dir}: {e}") from None
+        closed = False
         try:
             open_before_run(self.plan, sim.t0)
             result = self.simulator.run(sim.duration, t0=sim.t0, progress=progress,
@@ -95,10 +96,23 @@ class Session:
             if self.interrupted is not None:
                 result.summary["interrupted"] = {**self.interrupted, "at_sim_time_s": result.summary["t_end_s"]}
             add_reports(self.plan, result.summary)          # components' report(cache, summary): framework/run_reports.py
-            if out_dir is not None:
-                write_run(Path(out_dir), result, self.config_text())
-        finally:
+            # closed before the summary is written: a recorder that fails to finish its file (a full disk)
+            # fails the run, and the summary must say so, not "success"
+            closed = True
             close_after_run(self.plan)
+            if out_dir is not None:
+                write_component_files(self.plan, Path(out_dir), result.summary)     # run_reports.py
+                write_run(Path(out_dir), result, self.config_text())
+        except BaseException as e:     # KeyboardInterrupt too: the recorders still close their files
+            if not closed:
+                try:
+                    close_after_run(self.plan)
+                except Exception:       # noqa: BLE001 - the error already under way is the run's
+                    pass
+            if out_dir is not None:         # the folder says how the run ended, not "still running"
+                write_error_summary(out_dir, self.resolved.source, e)
+            raise
+        finally:
             if out_dir is not None:
                 release_out_dir(out_dir)
         return result

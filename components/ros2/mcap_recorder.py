@@ -25,6 +25,13 @@ record: ``snakesim mcap recover FILE`` rewrites it whole (:mod:`.mcap_recover`, 
 reindex`` or the Go ``mcap recover``), or read it record by record with
 ``mcap.reader.NonSeekingReader(f).iter_messages(log_time_order=False)`` up to its ``EndOfFile``.
 
+A file that cannot be written (a full disk, a quota, a read-only or missing folder) ends the run with an
+error naming the file and the operating system's cause (:class:`McapWriteError`, so ``snakesim run`` exits
+non-zero); what was written before is kept, marked by its name, as ``FILE.partial`` (``FILE`` itself is not
+left half-written), and the error says how to rewrite it whole: ``snakesim mcap recover FILE.partial -o
+FILE`` once there is room. Every write goes through :func:`snakesim.framework.output_files._write_all`, the
+one write of every output file, so a test makes the Nth write fail as it does for the others.
+
 Every channel carries rosbag2's ``offered_qos_profiles`` metadata: the QoS the topic is offered
 with on the wire (:data:`.transport.QOS`, the sensor bridge's for its topics).
 
@@ -35,6 +42,7 @@ with on the wire (:data:`.transport.QOS`, the sensor bridge's for its topics).
 from __future__ import annotations
 
 import dataclasses
+import errno
 import threading
 import time
 import weakref
@@ -42,6 +50,9 @@ from functools import lru_cache
 from pathlib import Path
 
 from pydantic import Field
+
+from snakesim.framework import output_files
+from snakesim.framework.output_files import OutputError
 
 from .publisher import PublisherRun, Ros2Publisher, Ros2PublisherParams
 
@@ -92,20 +103,23 @@ class McapMessageWriter:
         self.channel.write(raw.ljust((len(raw) + 3) & ~3, b"\0"))
 
 
+class McapWriteError(OutputError):
+    """The MCAP file could not be written: its name, the cause, where the partial recording was kept."""
+
+
 class _Unbuffered:
     """The stream mcap's writer writes to: each write goes straight to the file (the writer writes
     once per finished chunk, once for its message index), so what it finished is on disk, not in a
-    buffer a killed process takes with it."""
+    buffer a killed process takes with it. (A buffered file flushed after each write: its ``write``
+    writes everything or raises, so :func:`output_files._write_all` is the whole write.)"""
 
     def __init__(self, path: Path):
-        self.raw = open(path, "wb", buffering=0)
+        self.raw = open(path, "wb")
         self.pos = 0
 
     def write(self, data) -> int:
-        view = memoryview(data)
-        while view:
-            n = self.raw.write(view)
-            view = view[n:]
+        output_files._write_all(self.raw, data)
+        self.raw.flush()
         self.pos += len(data)
         return len(data)
 
@@ -116,7 +130,10 @@ class _Unbuffered:
         pass
 
     def close(self) -> None:
-        self.raw.close()
+        try:
+            self.raw.close()
+        except OSError:
+            pass                # what the failed write left in the buffer: the file is partial already
 
 
 class McapFile:
@@ -135,20 +152,30 @@ class McapFile:
     def __init__(self, path: Path, chunk_size: int = CHUNK_SIZE, flush_period: float = 1.0):
         from mcap.writer import CompressionType, Writer
 
-        path.parent.mkdir(parents=True, exist_ok=True)
         self.path = path
-        self.stream = _Unbuffered(path)
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            self.stream = _Unbuffered(path)
+        except OSError as e:
+            raise McapWriteError(f"--ros2-mcap: cannot write {path}: {e.strerror or e}; name a place you can "
+                                 "write to") from None
         self.writer = Writer(self.stream, chunk_size=chunk_size, compression=CompressionType.ZSTD)
-        self.writer.start(profile=PROFILE, library="snakesim ros2_mcap")
+        self.error: McapWriteError | None = None     # the write that failed (raised once, by add or close)
+        self.reported = False
+        self.closed = False
+        self.lock = threading.Lock()
+        self._stop = threading.Event()
+        try:
+            self.writer.start(profile=PROFILE, library="snakesim ros2_mcap")
+        except OSError as e:
+            self._fail(e)
+            self._raise()
         self.schemas: dict[str, int] = {}
         self.channels: dict[str, int] = {}
         self.users = 0
         self.flush_period = flush_period
         self.due = None                   # monotonic time by which the chunk in progress goes to disk
         self.flushes = 0                  # timed flushes so far
-        self.closed = False
-        self.lock = threading.Lock()
-        self._stop = threading.Event()
         self._flusher = threading.Thread(target=self._flush_loop, name=f"mcap-flush {path.name}", daemon=True)
         self._flusher.start()
 
@@ -169,31 +196,72 @@ class McapFile:
         if cid is not None:
             return cid
         with self.lock:
-            sid = self.schemas.get(ros_name)
-            if sid is None:
-                sid = self.schemas[ros_name] = self.writer.register_schema(
-                    name=ros_name, encoding="ros2msg", data=schema_text(ros_name).encode())
-            cid = self.channels[topic] = self.writer.register_channel(
-                topic=topic, message_encoding="cdr", schema_id=sid,
-                metadata={"offered_qos_profiles": qos_yaml(topic, qos)})
+            try:
+                sid = self.schemas.get(ros_name)
+                if sid is None:
+                    sid = self.schemas[ros_name] = self.writer.register_schema(
+                        name=ros_name, encoding="ros2msg", data=schema_text(ros_name).encode())
+                cid = self.channels[topic] = self.writer.register_channel(
+                    topic=topic, message_encoding="cdr", schema_id=sid,
+                    metadata={"offered_qos_profiles": qos_yaml(topic, qos)})
+            except OSError as e:
+                self._fail(e)
+                cid = -1                  # nothing more is written: adds to it are dropped
+        self._raise()
         return cid
 
     def add(self, channel_id: int, log_time: int, data: bytes, sequence: int = 0) -> None:
-        """One message (log and publish time ``log_time`` ns); writes the chunk when it is full or due."""
+        """One message (log and publish time ``log_time`` ns); writes the chunk when it is full or due.
+        Raises :class:`McapWriteError` once the file could not be written (here or by the flusher)."""
         with self.lock:
-            self.writer.add_message(channel_id, log_time=log_time, data=data, publish_time=log_time,
-                                    sequence=sequence)
-            due = self.due
-            if due is None:
-                self.due = time.monotonic() + self.flush_period
-            elif time.monotonic() >= due:
-                self._flush()
+            if self.error is None:
+                try:
+                    self.writer.add_message(channel_id, log_time=log_time, data=data, publish_time=log_time,
+                                            sequence=sequence)
+                except OSError as e:          # a full chunk written, and the disk said no
+                    self._fail(e)
+                due = self.due
+                if due is None:
+                    self.due = time.monotonic() + self.flush_period
+                elif time.monotonic() >= due:
+                    self._flush()
+        self._raise()
 
     def _flush(self) -> None:
         if not self.closed:
-            self.writer.flush()               # the chunk in progress, finished, to the file
+            try:
+                self.writer.flush()               # the chunk in progress, finished, to the file
+            except OSError as e:
+                self._fail(e)
+                return
             self.due = None
             self.flushes += 1
+
+    def _fail(self, e: OSError) -> None:
+        """A write failed (under :attr:`lock`): nothing more is written; the file is closed and kept, marked
+        partial by its name, and the error that says so is kept for :meth:`_raise`."""
+        self.closed = True
+        self._stop.set()
+        self.stream.close()
+        kept = self.path.with_name(self.path.name + ".partial")
+        try:
+            self.path.replace(kept)
+            where = (f"what was written before is kept as {kept}: `snakesim mcap recover {kept} -o {self.path}` "
+                     "rewrites it whole once there is room")
+        except OSError:
+            kept = self.path
+            where = (f"what was written before is left in {kept}, without its summary: `snakesim mcap recover "
+                     f"{kept}` rewrites it whole once there is room")
+        todo = "free some space or record elsewhere" if e.errno in (errno.ENOSPC, errno.EDQUOT) else \
+            "record to a place you can write to"
+        self.error = McapWriteError(f"--ros2-mcap: cannot write {self.path}: {e.strerror or e}; the recording "
+                                    f"stopped there and {where}; {todo}")
+
+    def _raise(self) -> None:
+        """Raise the failed write's error, once (the run's update or, if the flusher met it, its close)."""
+        if self.error is not None and not self.reported:
+            self.reported = True
+            raise self.error
 
     def flush(self) -> None:
         """Write the chunk in progress to the file now."""
@@ -226,18 +294,22 @@ class McapFile:
             self.close()
 
     def close(self) -> None:
-        if self.closed:
-            return
+        """The summary and footer written and the file closed; raises :class:`McapWriteError` if a write
+        failed and the run has not been told yet."""
         self._stop.set()
         with self.lock:
             if not self.closed:
                 self.closed = True
-                self.writer.finish()
-                self.stream.close()
+                try:
+                    self.writer.finish()
+                    self.stream.close()
+                except OSError as e:
+                    self._fail(e)
         if self._flusher is not threading.current_thread():
             self._flusher.join(timeout=1.0)
         if McapFile._open.get(self.path) is self:
             del McapFile._open[self.path]
+        self._raise()
 
 
 def qos_yaml(topic: str, qos=None) -> str:
@@ -337,6 +409,8 @@ def attach_mcap(resolved, path: str) -> str:
         _mirror(resolved, bridge, SENSOR_MCAP, path)
     from .odometry_attach import attach_odometry_mcap
     attach_odometry_mcap(resolved, path)
+    from .terrain_map_attach import attach_terrain_map_mcap
+    attach_terrain_map_mcap(resolved, path)
     return name
 
 
