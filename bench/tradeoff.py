@@ -34,6 +34,10 @@ each of its integrator settings, read from its JSON (run first, --quick as here,
 a table per setting (cases completed, the worst error over the cases, CPU time and RTF by CPU time over all of
 them) and two more Pareto panels: each setting's RTF against its worst error (a setting that failed a case on
 the top edge), and every case's point. `--scene none --no-held --events` plots the events alone.
+
+The picture (--plot; docs/images/tradeoff-pareto.png) is drawn by bench/tradeoff_plot.py: the scene's own
+setting (the default integrator and step) a starred point named "default", every label placed clear of the
+others, of the markers and of the legend.
 """
 
 from __future__ import annotations
@@ -58,6 +62,7 @@ from snakesim.framework.integrators.rosenbrock_w import RosenbrockWParams  # noq
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import held_cases  # noqa: E402
 from interleaved import available, compare  # noqa: E402
+from tradeoff_plot import DEFAULT, plot  # noqa: E402
 
 
 def _track(result, scene):
@@ -110,7 +115,7 @@ def settings(quick: bool):
             f" {k}={v:g}" if isinstance(v, (int, float)) else f" {k}={v}" for k, v in shown.items()),
             "integrator": {"name": name, "params": p}, "dt": dt}
     # the scene's own setting, as a user runs it (the default scene: rosenbrock_w under error control at 20 ms)
-    out.append({"label": "scene's own setting", "integrator": None, "dt": None})
+    out.append({"label": DEFAULT, "integrator": None, "dt": None})
     steps = {"rk4": [5e-4, 1e-3, 2e-3] if quick else [5e-4, 1e-3, 2e-3, 4e-3],
              "semi_implicit_euler": [2.5e-4, 5e-4, 1e-3] if quick else [1e-4, 2.5e-4, 5e-4, 1e-3, 2e-3],
              "rosenbrock2": [2e-3] if quick else [1e-3, 2e-3, 5e-3]}
@@ -316,92 +321,6 @@ def events_table(res: dict) -> list[dict]:
         print(f"| {e['setting']} | {e['cases']} | {', '.join(e['failed']) or '—'} | {we} | {e['cpu_s']:.2f} | "
               f"{e['rtf_cpu']:.3g} |")
     return out
-
-
-def pareto(points):
-    """Indices of the points no other point beats in both RTF (higher) and error (lower)."""
-    idx = []
-    for i, (r, e) in enumerate(points):
-        if not any((r2 >= r and e2 <= e) and (r2 > r or e2 < e) for j, (r2, e2) in enumerate(points) if j != i):
-            idx.append(i)
-    return idx
-
-
-def plot(rows, path, event_rows=()):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    scenes = sorted({r["scene"] for r in rows})
-    panels = len(scenes) + (2 if event_rows else 0)
-    if not panels:
-        return
-    fig, axes = plt.subplots(1, panels, figsize=(6.5 * panels, 5), squeeze=False)
-    if event_rows:
-        plot_events(axes[0][len(scenes)], axes[0][len(scenes) + 1], event_rows)
-    for ax, scene in zip(axes[0], scenes):
-        ok = [r for r in rows if r["scene"] == scene and r.get("stable") and "pos_err_m" in r]
-        pts = [(r["rtf"], max(r["pos_err_m"], 1e-12)) for r in ok]
-        for r, (x, y) in zip(ok, pts):
-            ax.scatter(x, y, s=18)
-            ax.annotate(r["setting"], (x, y), fontsize=6, xytext=(3, 2), textcoords="offset points")
-        front = sorted((pts[i] for i in pareto(pts)), key=lambda p: p[0])
-        if front:
-            ax.plot(*zip(*front), "k--", lw=0.8, label="Pareto front")
-        ax.set_xscale("log"), ax.set_yscale("log")
-        ax.set_xlabel("real-time factor (sim s / wall s)")
-        ax.set_ylabel("max position error vs reference, m")
-        ax.set_title(f"{scene} ({ok[0]['horizon_s']:g} s)" if ok else scene)
-        ax.grid(True, which="both", lw=0.3)
-        ax.legend(fontsize=7)
-    fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=120)
-
-
-def plot_events(ax, ax_cases, event_rows):
-    """Left: each event setting's RTF (CPU, over all cases) against its worst error, the settings that failed a
-    case as crosses on the top edge, the Pareto front of the rest. Right: every case's point, by setting."""
-    import matplotlib
-    import matplotlib.pyplot as plt
-
-    ok = [e for e in event_rows if not e["failed"] and e["worst_error_m"] is not None]
-    top = max([e["worst_error_m"] for e in ok] + [1e-3]) * 3
-    colors = {e["setting"]: plt.cm.tab10(i % 10) for i, e in enumerate(event_rows)}
-    for e in event_rows:
-        failed = bool(e["failed"]) or e["worst_error_m"] is None
-        y = top if failed else max(e["worst_error_m"], 1e-7)
-        ax.scatter(e["rtf_cpu"], y, s=24, marker="x" if failed else "o", color=colors[e["setting"]])
-        ax.annotate(e["setting"] + (f" (failed {len(e['failed'])} of {e['cases']})" if e["failed"] else ""),
-                    (e["rtf_cpu"], y), fontsize=6, xytext=(3, 2), textcoords="offset points")
-    pts = [(e["rtf_cpu"], max(e["worst_error_m"], 1e-7)) for e in ok]
-    front = sorted((pts[i] for i in pareto(pts)), key=lambda p: p[0])
-    if front:
-        ax.plot(*zip(*front), "k--", lw=0.8, label="Pareto front")
-    ax.set_xscale("log"), ax.set_yscale("log")
-    ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
-    ax.set_xlabel("real-time factor by CPU time, all event cases")
-    ax.set_ylabel("worst error over the cases vs reference, m (x: failed a case)")
-    ax.set_title("events (bench/events.py): each setting ('scene': each case's own)", fontsize=10)
-    ax.grid(True, which="both", lw=0.3)
-    ax.legend(fontsize=7)
-    cases = sorted({p["case"] for e in event_rows for p in e["points"]})
-    markers = dict(zip(cases, "os^vD<>pPh*"))
-    for e in event_rows:
-        for p in e["points"]:
-            y = top if not p["completed"] or p["error_m"] is None else max(p["error_m"], 1e-7)
-            ax_cases.scatter(p["rtf_cpu"], y, s=20, color=colors[e["setting"]], marker=markers[p["case"]],
-                             alpha=0.35 if not p["completed"] else 0.9)
-    handles = ([plt.Line2D([], [], color=colors[e["setting"]], marker="o", ls="", label=e["setting"])
-                for e in event_rows] +
-               [plt.Line2D([], [], color="0.3", marker=markers[c], ls="", label=c) for c in cases])
-    ax_cases.legend(handles=handles, fontsize=5.5, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
-    ax_cases.set_xscale("log"), ax_cases.set_yscale("log")
-    ax_cases.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
-    ax_cases.set_xlabel("real-time factor by CPU time")
-    ax_cases.set_ylabel("error vs the case's reference, m (top edge: failed)")
-    ax_cases.set_title("events: every case")
-    ax_cases.grid(True, which="both", lw=0.3)
 
 
 if __name__ == "__main__":

@@ -17,7 +17,8 @@ Components are found by what their classes declare, never by their names or port
                drawn under world/sensors/<comp>/<port>. Wiring a sensor to the viewer keeps it
                running (the viewer is a sink), so --viz costs its ray casting even when nothing
                else reads it
-    series     every recorded signal ('comp.port'), one plot each
+    series     every recorded signal ('comp.port'), one plot each, its legend the element names the
+               port declares (planar_pose's pose: x, y, yaw)
 
 The types are imported from their packages' public modules (STRUCTURED below).
 
@@ -103,6 +104,15 @@ def viewer_period(dt: float, rates, target_hz: float = VIEWER_RATE_HZ) -> int:
     return best
 
 
+def declared_names(classes: dict, ref: str) -> list[str] | None:
+    """The element names output ``ref`` ('comp.port') declares as a fixed tuple (planar_pose's pose: x, y, yaw),
+    the plot's legend; None where they depend on the built component (per-link names) or none are given."""
+    comp, _, port = ref.partition(".")
+    out = getattr(classes.get(comp), "outputs", {}).get(port)
+    names = getattr(getattr(out, "signal", None), "names", None)
+    return list(names) if isinstance(names, tuple) else None
+
+
 def attach_viewer(resolved: Resolved, target: VizTarget, registry=None, name: str = "viz",
                   params: dict | None = None) -> Attached:
     """Add a ``rerun_viewer`` component to ``resolved`` and wire it (in place)."""
@@ -117,7 +127,9 @@ def attach_viewer(resolved: Resolved, target: VizTarget, registry=None, name: st
     uses = {}
     conns = []
     kinds = structured_inputs()
+    classes = {}
     for comp, spec, cls in registry.classes_in(resolved):
+        classes[comp] = cls
         if found.robot is None and provides_robot(cls):
             found.robot = comp
             uses["robot"] = comp             # explicit: the scene may have several providers
@@ -147,6 +159,7 @@ def attach_viewer(resolved: Resolved, target: VizTarget, registry=None, name: st
         found.series.append(ref)
         conns.append((ref, f"{name}.s{i}"))
     sink["series"] = list(found.series)
+    sink["series_names"] = [declared_names(classes, ref) for ref in found.series]
     sink["sensors"] = list(found.sensors)
     sim = resolved.sim
     sink["t_end"] = sim.t0 + sim.duration

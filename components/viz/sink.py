@@ -25,7 +25,9 @@ in   link_poses[nl, 7]  m, 1  [x, y, z, qx, qy, qz, qw] per link, world (the mul
                         without it, params.tether_lines are drawn as straight segments from
                         each tie point (link pose · offset) to its anchor
      s0 .. s{k-1}       one numeric input of any shape per entry of params.series (the signal
-                        it plots, 'comp.port'); made per instance from the params
+                        it plots, 'comp.port'); made per instance from the params; its legend
+                        names the elements as params.series_names does (attach.py fills it from
+                        the source port's declared names), else rerun numbers them
      sensor0 .. sensor{m-1}
                         one structured input per entry of params.sensors (the sensor output it
                         draws, 'comp.port'): a LidarScan (points coloured by intensity) or a
@@ -91,6 +93,9 @@ class RerunSinkParams(Params):
     frame_length: float = Field(0.1, gt=0, description="m, body frame axis length")
     force_scale: float = Field(0.002, gt=0, description="m of arrow per N of contact or attraction force")
     series: list[str] = Field(default_factory=list, description="'comp.port' plotted from inputs s0, s1, ...")
+    series_names: list[list[str] | None] = Field(
+        default_factory=list, description="each series' element names, the plot's legend (planar_pose: x, y, yaw), "
+                                          "as its port declares them; None or missing: numbered")
     sensors: list[str] = Field(default_factory=list, description="'comp.port' of lidar scans and camera frames "
                                                                  "drawn from inputs sensor0, sensor1, ...")
     point_radius: float = Field(0.01, gt=0, description="m, radius of a drawn lidar point")
@@ -234,7 +239,8 @@ class RerunSink(Component[RerunSinkParams]):
                 v.terrain_mesh = TerrainDerived(draw)
             else:
                 tmesh = draw(terrain)
-        series = [(s, None, int(np.size(a))) for s, a in zip(p.series, v.series)]
+        names = list(p.series_names) + [None] * (len(p.series) - len(p.series_names))
+        series = [(s, n, int(np.size(a))) for s, n, a in zip(p.series, names, v.series)]
         v.sensor_inputs = [sensor_input_name(i) for i in range(len(p.sensors))]
         bp = default_blueprint(pos, [E.series_path(s) for s in p.series],
                                _camera_pinholes(p.sensors, [getattr(u, n) for n in v.sensor_inputs]))
