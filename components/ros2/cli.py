@@ -7,15 +7,17 @@
     --ros2-distro D           humble (default) or jazzy: the node-graph announcement's layout
                               (ros_discovery_info, :mod:`.node_graph`); implies --ros2
     --ros2-rate TOPIC=HZ      per-topic rate (clock, joint_states, tf, imu, wrench, real_time_factor;
-                              0: off), repeatable;
-                              implies --ros2
+                              0: off), repeatable; a topic faster than the scene's base step is published
+                              at every step (the step is never shortened for it; the log says the rate
+                              it gets); implies --ros2
     --ros2-commands           hand the PID's set-points to ROS 2 (/joint_commands, /joint_command): the
                               scene's connections into pid.setpoint and pid.rate_ref are replaced by the
                               ros2_commands source's; implies --ros2. Without it, --ros2 accepts joint
                               commands only for a PID whose set-points the scene leaves unconnected
                               (/enable_gravity is accepted whenever the multibody's gravity input is free)
-    --ros2-lockstep           the run holds at each control period (100 Hz) until a command or a
-                              /sim/step arrives (:mod:`.sim_control`); implies --ros2
+    --ros2-lockstep           the run holds at each control period (100 Hz, or every base step when the
+                              step is longer) until a command or a /sim/step arrives
+                              (:mod:`.sim_control`); implies --ros2
     --ros2-paused             start held at t0 (/sim/pause false or /sim/step N to go on); implies --ros2
     --ros2-hold-timeout S     stop the run after S wall seconds held with no request (default 0: wait
                               for ever); implies --ros2
@@ -78,7 +80,7 @@ def _rates(resolved, value):
     spec = resolved.components[name]
     merged = {**spec.params.get("rates", {}), **rates}
     attach_ros2(resolved, params={"rates": merged})
-    # the publisher ticks at the fastest topic rate: recompute it
+    # the publisher ticks at the fastest topic rate, at most once a base step: recompute it
     from snakesim.framework.rates import nearest_period
 
     from .publisher import DEFAULT_RATES
@@ -118,8 +120,8 @@ def ros2_run_options():
     options = [
         (click.Option(["--ros2"], is_flag=True, default=None,
                       help="Publish the robot on ROS 2 (Cyclone DDS; /clock, /joint_states, /tf, /tf_static, "
-                           "/robot_description, /sim/real_time_factor, /imu, /fts/*, lidar PointCloud2 and camera Image/CameraInfo "
-                           "when present; "
+                           "/robot_description, /sim/real_time_factor, /imu, /fts/*, lidar PointCloud2 and camera Image/CameraInfo, "
+                           "/odom and /terrain_map/* (--odometry, --terrain-map) when present; "
                            "/sim/pause, /sim/step, /sim/reset, /sim/set_pose, /sim/set_joint_positions, "
                            "/tethers/attached and the /sim/reset and /sim/pause services accepted); loopback only "
                            "by default."), _ros2),
@@ -132,8 +134,8 @@ def ros2_run_options():
                       help="ROS 2 distribution of the nodes that list snakesim's node graph (ros_discovery_info: "
                            "its Gid layout changed after Humble; default humble); implies --ros2."), _distro),
         (click.Option(["--ros2-rate"], multiple=True, default=None, metavar="TOPIC=HZ",
-                      help="ROS 2 topic rate: clock, joint_states, tf, imu, wrench, real_time_factor (0: off); repeatable; "
-                           "implies --ros2."), _rates),
+                      help="ROS 2 topic rate: clock, joint_states, tf, imu, wrench, real_time_factor (0: off); a topic "
+                           "faster than the base step is published every step; repeatable; implies --ros2."), _rates),
         (click.Option(["--ros2-commands"], is_flag=True, default=None,
                       help="Hand the PID's set-points to ROS 2 (/joint_commands JointTrajectory, /joint_command "
                            "JointState), replacing the scene's set-point source; implies --ros2."), _commands),

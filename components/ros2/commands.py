@@ -324,8 +324,7 @@ class Ros2Commands(ClosedAfterRun, Component[Ros2CommandsParams]):
         run.finalizer = weakref.finalize(run, dds.close)
 
     def _take(self, run: "CommandsRun") -> list:
-        if not run.arrivals.wait(0):          # nothing arrived: one call, not a take per reader
-            return []
+        """Every sample the readers hold (the caller asked ``run.arrivals()`` first), in source-time order."""
         got = []
         for topic, typ, reader in run.readers:
             for m in reader.take(N=256):
@@ -345,12 +344,15 @@ class Ros2Commands(ClosedAfterRun, Component[Ros2CommandsParams]):
             y.rate[:] = 0.0
             y.gravity[0] = np.nan
             y.rejected[0] = y.applied[0] = 0.0
+            run.q, run.qd = u.q, u.qd             # the input views: the same arrays for the whole run
             run.started = True
         if run.dds is None:
             self._open(run)
             y.aborted[0] = y.goal_missed[0] = 0.0
-        run.q, run.qd = u.q, u.qd
-        msgs = self._take(run)
+        arrived = run.arrivals()
+        if not arrived and not run.trajectories:
+            return                                 # the usual tick: nothing arrived, nothing to follow
+        msgs = self._take(run) if arrived else []
         if msgs and run.trajectories:              # the set-points in force at t: a new command starts from them
             run.trajectories = [tr for tr in run.trajectories if self._follow(run, tr, t, y)]
         for topic, msg in msgs:
@@ -543,7 +545,7 @@ class CommandsRun:
     started: bool = False
     dds: object = None
     readers: tuple = ()
-    arrivals: object = None          # a WaitSet on the readers: whether anything arrived (_take)
+    arrivals: object = None          # transport.Arrivals on the readers: whether anything arrived
     rejected: int = 0
     applied: int = 0
     last_reason: str = ""

@@ -168,8 +168,23 @@ class Ros2Publisher(ClosedAfterRun, Component[Ros2PublisherParams]):
         if self.rate is None:                    # the sink's tick: the fastest topic
             self.rate = max(self.topic_rates.values(), default=1.0)
         tick = 1.0 / self.rate
-        self.periods = {k: period_of(r, tick, f"{self.name}: rates.{k} (at the component's {self.rate:g} Hz):")
+        # a topic faster than the component's tick (the default 100 Hz on a scene stepping 20 ms: the tick
+        # is held to whole base steps) is published at every tick, stamped with that tick's time: its
+        # achieved rate is the tick's, said once (the run's step is the scene's; nothing is made to step
+        # faster for a topic)
+        self.periods = {k: 1 if r > self.rate * (1 + 1e-9) else
+                        period_of(r, tick, f"{self.name}: rates.{k} (at the component's {self.rate:g} Hz):")
                         for k, r in self.topic_rates.items()}
+        #: Hz each topic is published at (the asked rate, or the tick's where the tick is slower)
+        self.achieved_rates = {k: self.rate / n for k, n in self.periods.items()}
+        slow = {k: r for k, r in self.topic_rates.items() if self.achieved_rates[k] < r * (1 - 1e-9)}
+        if slow and self.type_name == "ros2_publisher":
+            import logging
+
+            logging.getLogger("snakesim.ros2").warning(
+                "%s: %s published at %g Hz, every tick of %g s (the scene's step is coarser than %s; stamps "
+                "are the ticks' simulated times)", self.name, ", ".join(f"{k} {r:g} Hz" for k, r in slow.items()),
+                self.rate, tick, "their periods" if len(slow) > 1 else "its period")
         # not a templated topic (not in topic_rates): a low-rate Float64 computed from the wall clock
         self.rtf_period = (period_of(rtf, tick, f"{self.name}: rates.real_time_factor (at the component's "
                                                 f"{self.rate:g} Hz):") if rtf > 0 else 0)
@@ -267,16 +282,25 @@ class Ros2Publisher(ClosedAfterRun, Component[Ros2PublisherParams]):
         run.finalizer = weakref.finalize(run, dds.close)
 
     def _schedule(self, run: "PublisherRun", writers: dict, u) -> None:
-        """What each tick writes: (topic key, period, writers, (field, input array)...) in a flat tuple,
-        so the per-tick loop reads no dicts. Shared by every sink that sends these messages."""
+        """What each tick writes: (period, topic key, message patches) per topic in a flat tuple, each patch
+        bound to its template, input arrays and writer (:mod:`.cdr_patch`), so the per-tick loop reads no
+        dicts and patches with slice copies where the layout allows. Shared by every sink that sends these
+        messages."""
+        from .cdr_patch import MessagePatch
+
         inputs = {"joint_states": [("position", u.joint_positions), ("velocity", u.joint_velocities)]
                   + ([("effort", u.joint_efforts)] if self.p.effort else []),
                   "tf": [("poses", u.link_poses)],
                   "imu": [("orientation", u.imu_orientation), ("angular_velocity", u.imu_angular_rate),
                           ("linear_acceleration", u.imu_specific_force)]}
         run.wrenches = u.sensor_wrenches
-        run.plan = tuple((key, self.periods[key], tuple(writers[key]), tuple(inputs.get(key, ())))
-                         for key in self.topic_rates)
+        plan = []
+        for key in self.topic_rates:
+            patches = tuple(MessagePatch(tpl, [("wrench", run.wrenches[k])] if key == "wrench" else inputs.get(key, ()),
+                                         writer)
+                            for k, (writer, tpl) in enumerate(writers[key]))
+            plan.append((self.periods[key], key, patches))
+        run.plan = tuple(plan)
         run.tick = 0
 
     # -- the per-tick path ----------------------------------------------------------------------
@@ -296,23 +320,17 @@ class Ros2Publisher(ClosedAfterRun, Component[Ros2PublisherParams]):
         ns = int(t * 1e9 + 0.5) if t > 0 else 0
         sec, nsec = divmod(ns, 1_000_000_000)
         tick = run.tick
-        for key, period, writers, inputs in run.plan:
+        published = run.published
+        for period, key, patches in run.plan:
             if tick % period:
                 continue
-            for k, (writer, tpl) in enumerate(writers):
-                tpl.set_stamp(sec, nsec)
-                if key == "wrench":
-                    tpl.set_floats("wrench", run.wrenches[k])
-                else:
-                    for field, arr in inputs:
-                        tpl.set_floats(field, arr.reshape(-1))
-                writer.write(tpl.buf)
-            run.published[key] += 1
+            for patch in patches:
+                patch.publish(sec, nsec)
+            published[key] += 1
         if run.rtf is not None and tick % run.rtf[0] == 0:
             self._publish_rtf(run, t)
         run.tick = tick + 1
         run.publish_time += time.perf_counter() - wall
-
 
     def _publish_rtf(self, run: "PublisherRun", t: float) -> None:
         now = time.perf_counter()

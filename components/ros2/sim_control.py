@@ -167,7 +167,7 @@ class Ros2SimControl(ClosedAfterRun, Component[Ros2SimControlParams]):
         True when one did. ``t``: sim time, for stale stamps and the log."""
         if run.dds is None:
             self._open(run)
-        if not run.arrivals.wait(0):            # nothing arrived on any reader: one C call, not one take each
+        if not run.arrivals():                  # nothing arrived on any reader: one C call, not one take each
             return False
         got = []
         for topic, typ, reader in run.readers:
@@ -320,7 +320,7 @@ class SimControlRun:
     readers: tuple = ()
     services: dict = dataclasses.field(default_factory=dict)
     commands: tuple = ()
-    arrivals: object = None          # a WaitSet on every reader: whether anything arrived (poll)
+    arrivals: object = None          # transport.Arrivals on every reader: whether anything arrived (poll)
     clock: object = None
     finalizer: object = None
 
