@@ -91,7 +91,6 @@ def attach_ros2(resolved: Resolved, registry=None, params: dict | None = None) -
     """Add (once) a ``ros2_publisher`` to ``resolved``, wired by port role; update its params. Its name.
     Adds (once) the command source too (:func:`attach_commands`), with the same domain and interface."""
     shared = {k: v for k, v in (params or {}).items() if k in SHARED}
-    _control_period(resolved, params)
     name = _attach_publisher(resolved, registry, params)
     pub = resolved.components[name].params
     both = {**{k: pub[k] for k in SHARED if k in pub}, **shared}
@@ -101,26 +100,11 @@ def attach_ros2(resolved: Resolved, registry=None, params: dict | None = None) -
     attach_brace_commands(resolved, registry, both)
     attach_sensor_bridge(resolved, registry, both)
     attach_odometry(resolved, registry, {**both, "world_frame": pub.get("world_frame", "world")})
+    from .terrain_map_attach import attach_terrain_map
+    attach_terrain_map(resolved, registry, {**both, "world_frame": pub.get("world_frame", "world")})
     attach_sim_control(resolved, {**both, "world_frame": pub.get("world_frame", "world"),
                                   "clock_rate": {**DEFAULT_RATES, **pub.get("rates", {})}["clock"]}, registry)
     return name
-
-
-def _control_period(resolved: Resolved, params: dict | None) -> None:
-    """A ROS 2 stack sees fixed rates (/clock and /joint_states at 100 Hz unless ``rates`` says otherwise), and
-    its commands are held for a base step: a scene whose base step is a whole multiple of the fastest topic's
-    period (the default scene's 20 ms against 100 Hz) runs at that period under --ros2, which the log says.
-    With error control the step only costs time, never accuracy; any other mismatch is the publisher's error."""
-    rates = {**DEFAULT_RATES, **(params or {}).get("rates", {})}
-    fastest = max((r for r in rates.values() if r > 0), default=None)
-    dt = resolved.sim.dt
-    m = dt * fastest if fastest else 0.0
-    if m > 1.5 and abs(m - round(m)) < 1e-9 * m:
-        new = dt / round(m)
-        log.warning(
-            "--ros2: base step %g s -> %g s, the period of the fastest topic (%g Hz): the ROS 2 stack's control "
-            "period", dt, new, fastest)
-        resolved.sim = resolved.sim.model_copy(update={"dt": new})
 
 
 def _multibody(resolved: Resolved, registry) -> str | None:

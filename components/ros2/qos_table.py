@@ -43,6 +43,7 @@ def catalogue_rows() -> list[tuple]:
     from .sensor_bridge import SENSOR_QOS
     from .sim_control import PAUSE_TOPIC, RESET_TOPIC, STEP_TOPIC
     from .tether_commands import TETHER_TOPIC
+    from .terrain_map_attach import COSTMAP_TOPIC, ELEVATION_TOPIC, MAP_QOS
 
     pub = [("/clock", "rosgraph_msgs/msg/Clock"), ("/joint_states", "sensor_msgs/msg/JointState"),
            ("/tf", "tf2_msgs/msg/TFMessage"), ("/tf_static", "tf2_msgs/msg/TFMessage"),
@@ -50,14 +51,17 @@ def catalogue_rows() -> list[tuple]:
            ("/imu", "sensor_msgs/msg/Imu"), ("/fts/<joint>", "geometry_msgs/msg/WrenchStamped"),
            (TRUTH_TOPIC, "nav_msgs/msg/Odometry"), (ESTIMATE_TOPIC, "nav_msgs/msg/Odometry")]
     sensors = [("/<lidar>/points", "sensor_msgs/msg/PointCloud2"), ("/<camera>/image_raw", "sensor_msgs/msg/Image"),
-               ("/<camera>/depth", "sensor_msgs/msg/Image"), ("/<camera>/camera_info", "sensor_msgs/msg/CameraInfo")]
+               ("/<camera>/depth", "sensor_msgs/msg/Image"), ("/<camera>/labels", "sensor_msgs/msg/Image"),
+               ("/<camera>/camera_info", "sensor_msgs/msg/CameraInfo")]
     sub = [(TRAJECTORY_TOPIC, "trajectory_msgs/msg/JointTrajectory"), (JOINT_TOPIC, "sensor_msgs/msg/JointState"),
            (GRAVITY_TOPIC, "std_msgs/msg/Bool"), (PAUSE_TOPIC, "std_msgs/msg/Bool"),
            (STEP_TOPIC, "std_msgs/msg/UInt32"), (RESET_TOPIC, "std_msgs/msg/Empty"),
            (POSE_TOPIC, "geometry_msgs/msg/PoseStamped"), (JOINTS_TOPIC, "sensor_msgs/msg/JointState"),
            (TETHER_TOPIC, "std_msgs/msg/UInt8MultiArray"), (GAIT_TOPIC, "rcl_interfaces/msg/ParameterEvent"),
            (BRACE_TOPIC, "rcl_interfaces/msg/ParameterEvent")]
-    return ([row(t, "pub", ty) for t, ty in pub] + [row(t, "pub", ty, SENSOR_QOS) for t, ty in sensors]
+    maps = [(COSTMAP_TOPIC, "nav_msgs/msg/OccupancyGrid"), (ELEVATION_TOPIC, "grid_map_msgs/msg/GridMap")]
+    return ([row(t, "pub", ty) for t, ty in pub] + [row(t, "pub", ty, MAP_QOS) for t, ty in maps]
+            + [row(t, "pub", ty, SENSOR_QOS) for t, ty in sensors]
             + [row(t, "sub", ty) for t, ty in sub])
 
 

@@ -1,5 +1,5 @@
 """``snakesim run --odometry [LINK]``: an ``odometry`` component (components/sensors/odometry.py) on any robot
-scene.
+scene (``--terrain-map``: terrain_map_cli.py).
 
 Finds, by what the classes declare (never by names), the component providing the robot
 (``Provides(RobotModel)``) and its LINK_POSES / LINK_VELOCITIES outputs, and adds ``odometry`` (at
@@ -24,7 +24,7 @@ RECORDED = ("pose", "twist", "estimate_pose", "estimate_twist")
 ROOT = ""
 
 
-def _robot(resolved, registry):
+def robot_with_link_ports(resolved, registry, option: str = OPTION):
     """(robot component, its LINK_POSES port, its LINK_VELOCITIES port)."""
     from snakesim.components.multibody.robot_model import RobotModel
     from snakesim.components.port_roles import LINK_POSES, LINK_VELOCITIES
@@ -37,8 +37,8 @@ def _robot(resolved, registry):
         vels = [p for p, o in cls.outputs.items() if o.role == LINK_VELOCITIES]
         if poses and vels:
             return comp, poses[0], vels[0]
-    raise ConfigError("odometry needs a robot: no component provides one with link poses and velocities "
-                      "(a multibody)", OPTION)
+    raise ConfigError(f"{option.lstrip('-')} needs a robot: no component provides one with link poses and "
+                      "velocities (a multibody)", option)
 
 
 def attach_odometry_sensor(resolved, link: str | None = None, registry=None) -> str:
@@ -52,7 +52,7 @@ def attach_odometry_sensor(resolved, link: str | None = None, registry=None) -> 
 
     if NAME in resolved.components:
         raise ConfigError(f"the scene already has a component named '{NAME}'", OPTION)
-    robot, poses, vels = _robot(resolved, registry or default_registry())
+    robot, poses, vels = robot_with_link_ports(resolved, registry or default_registry())
     params = {"link": link} if link else {}
     resolved.components[NAME] = ComponentSpec(type="odometry", rate=DEFAULT_RATE, params=params,
                                               uses={"robot": robot})
@@ -77,9 +77,12 @@ _odometry.for_check = True
 
 @hookimpl(specname="snakesim_run_options")
 def sensors_run_options():
+    from .terrain_map_cli import terrain_map_options
+
     return [
         (click.Option([OPTION], is_flag=False, flag_value=ROOT, default=None, metavar="[LINK]",
                       help="Add odometry (50 Hz: the link's true pose and twist, and a dead-reckoning estimate) "
                            "of LINK (default: the robot's root link), recorded; on /odom and /odom/ground_truth "
                            "with --ros2 / --ros2-mcap"), _odometry),
+        *terrain_map_options(),
     ]

@@ -29,9 +29,11 @@ Cost (nav_msgs/OccupancyGrid semantics: int8, 0 free … 100 lethal, −1 unknow
     cost      100 if step ≥ ``max_step``, else rint(100 · min(s / max_slope, 1))
     −1        where the elevation is unknown
 
-Sampled at ``rate`` (Hz; 1 Hz when the assembly gives none) and held between samples; before the first
-sample (the first discrete update, t = 1/rate in a run) every cell is unknown. The elevation and slope
-ports declare NaN a value (``may_be_nan``), so they may be recorded.
+Sampled at ``rate`` (Hz; 1 Hz when the assembly gives none), as the lidar samples: the outputs are computed
+at the component's ticks (t = 0, 1/rate, ...) from the link's pose at that tick, and the plan holds them in
+between, so a reader ticking with the map sees each sample at the tick it is taken (stamped
+``sample_time``). The elevation and slope ports declare NaN a value (``may_be_nan``), so they may be
+recorded.
 
 in   terrain              Terrain (the terrain component)
      link_poses[nl, 7]    role link_poses, from the multibody
@@ -39,17 +41,20 @@ out  elevation[cells, cells]    m, world z of the surface, NaN unknown; row r = 
      slope[cells, cells]        rad, NaN unknown
      cost[cells, cells]         int8, OccupancyGrid data (row-major: data[r · cells + c])
      map_origin[3]              m, world corner of cell (0, 0): OccupancyGrid info.origin position
-     (no feedthrough: the outputs are the held sample)
+     sample_time[]              s, simulated time of the sample (the stamp a publisher gives it:
+                                components/ros2/terrain_map_attach.py)
+     (feedthrough from both inputs: a sample is the terrain under the link's pose of its tick)
 uses robot: RobotModel (the multibody's): the link row
 
 :func:`export_sdf_volume` writes the terrain's signed distance on a regular 3-D grid as ``.npz``
 (format: :data:`SDF_VOLUME_FORMAT`), a reference for scoring TSDF/ESDF mappers (voxblox, nvblox);
-:func:`load_sdf_volume` reads it back.
+:func:`load_sdf_volume` reads it back; ``snakesim terrain sdf`` is its command (components/terrain/cli.py).
+``snakesim run --terrain-map`` adds the map to any robot scene (components/sensors/terrain_map_cli.py): on ROS 2 with
+``--ros2`` (components/ros2/terrain_map_attach.py), saved with ``--out`` (.terrain_map_files).
 """
 
 from __future__ import annotations
 
-import dataclasses
 import math
 
 import numpy as np
@@ -189,16 +194,6 @@ def cost_of(h: np.ndarray, resolution: float, max_slope: float, max_step: float,
     return np.where(known, c, -1.0).astype(np.int8)
 
 
-@dataclasses.dataclass
-class _Held:
-    """The held sample (the outputs between samples)."""
-
-    elevation: np.ndarray
-    slope: np.ndarray
-    cost: np.ndarray
-    origin: np.ndarray
-
-
 class TerrainMap(Component[TerrainMapParams]):
     """Elevation map (sphere-traced along −z) and OccupancyGrid cost map (slope, step) of the terrain around a
     link, sampled at a rate; see the module docstring."""
@@ -208,14 +203,15 @@ class TerrainMap(Component[TerrainMapParams]):
 
     terrain = Input(type=Terrain)
     link_poses = Input(shape=link_shape(7), unit=None, role=LINK_POSES)
-    elevation = Output(shape=lambda c: c.grid_shape, unit="m", feedthrough=(), may_be_nan=True,
+    elevation = Output(shape=lambda c: c.grid_shape, unit="m", feedthrough=True, may_be_nan=True,
                        doc="world z of the surface per cell, NaN unknown; rows y, columns x")
-    slope = Output(shape=lambda c: c.grid_shape, unit="rad", feedthrough=(), may_be_nan=True,
+    slope = Output(shape=lambda c: c.grid_shape, unit="rad", feedthrough=True, may_be_nan=True,
                    doc="local slope, NaN unknown")
-    cost = Output(shape=lambda c: c.grid_shape, unit="1", dtype=np.int8, feedthrough=(),
+    cost = Output(shape=lambda c: c.grid_shape, unit="1", dtype=np.int8, feedthrough=True,
                   doc="OccupancyGrid data: 0 free .. 100 lethal, -1 unknown")
-    map_origin = Output(shape=(3,), unit="m", feedthrough=(), names=("x", "y", "z"),
+    map_origin = Output(shape=(3,), unit="m", feedthrough=True, names=("x", "y", "z"),
                         doc="world corner of cell (0, 0) (z = 0): OccupancyGrid info.origin")
+    sample_time = Output(shape=(), unit="s", feedthrough=True, doc="simulated time of the sample")
 
     @property
     def grid_shape(self) -> tuple[int, int]:
@@ -235,11 +231,6 @@ class TerrainMap(Component[TerrainMapParams]):
     def discrete_state(self):
         return np.zeros(1)                                 # sample counter
 
-    def make_cache(self, x, u, y):
-        shape = self.grid_shape
-        return _Held(np.full(shape, np.nan), np.full(shape, np.nan), np.full(shape, -1, dtype=np.int8),
-                     np.zeros(3))
-
     def sample(self, terrain: Terrain, center) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(elevation, slope, cost, origin) of the map around the world point ``center`` (3,)."""
         p = self.p
@@ -252,16 +243,11 @@ class TerrainMap(Component[TerrainMapParams]):
         return h, s, c, np.array([corner[0], corner[1], 0.0])
 
     def output(self, t, x, u, y):
-        held = u.cache
-        y.elevation[:] = held.elevation
-        y.slope[:] = held.slope
-        y.cost[:] = held.cost
-        y.map_origin[:] = held.origin
+        # run at the component's ticks only (its rate); the plan holds the buffers in between
+        y.elevation[:], y.slope[:], y.cost[:], y.map_origin[:] = self.sample(u.terrain, u.link_poses[self._i, :3])
+        y.sample_time[...] = t
 
     def update(self, t, xd, u):
-        h, s, c, origin = self.sample(u.terrain, u.link_poses[self._i, :3])
-        held = u.cache
-        held.elevation[:], held.slope[:], held.cost[:], held.origin[:] = h, s, c, origin
         xd[0] += 1.0
 
 
@@ -323,13 +309,18 @@ def sdf_volume(terrain: Terrain, bounds, resolution: float) -> tuple[np.ndarray,
 
 def export_sdf_volume(terrain: Terrain, bounds, resolution: float, path) -> str:
     """Write the terrain's signed distance on the grid (``bounds`` = (lo, hi) m or a Bounds, ``resolution``
-    m) to ``path`` (.npz, format :data:`SDF_VOLUME_FORMAT`); returns the path written."""
+    m) to ``path`` (.npz, format :data:`SDF_VOLUME_FORMAT`), whole or not at all (framework/output_files.py:
+    an OutputError names the file and the cause); returns the path written."""
+    import io
+
+    from snakesim.framework.output_files import write_file
+
     dist, origin = sdf_volume(terrain, bounds, resolution)
-    path = str(path)
-    with open(path, "wb") as f:              # a file object: numpy appends no second ".npz"
-        np.savez_compressed(f, distance=dist, origin=origin, resolution=np.float64(resolution),
-                            terrain=np.str_(terrain.name), format=np.str_(SDF_VOLUME_FORMAT))
-    return path
+    buf = io.BytesIO()                       # a file object: numpy appends no second ".npz"
+    np.savez_compressed(buf, distance=dist, origin=origin, resolution=np.float64(resolution),
+                        terrain=np.str_(terrain.name), format=np.str_(SDF_VOLUME_FORMAT))
+    write_file(path, buf.getvalue())
+    return str(path)
 
 
 def load_sdf_volume(path) -> dict:

@@ -43,8 +43,6 @@ def test_tilted_plane_elevation_slope_and_cost_are_analytic():
     plane = PlaneTerrain(tilt=tilt, azimuth=az)
     center = (0.33, -0.21, 0.5)
     h = _map(plane, center, {"resolution": res, "extent": 2.0, "tolerance": tol, "max_slope": 0.5})
-    before = h.outputs()
-    assert (before["cost"] == -1).all() and np.isnan(before["elevation"]).all()     # nothing sampled yet
     assert h.c.rate == 1.0                                                         # the default rate
     h.update()
     out = h.outputs()
@@ -113,15 +111,17 @@ def test_cells_without_surface_in_range_are_unknown():
     assert (deep.outputs()["cost"] == -1).all()
 
 
-def test_held_between_samples_and_follows_the_link():
+def test_each_sample_follows_the_link_and_is_stamped():
     plane = PlaneTerrain()
     h = _map(plane, (0.0, 0.0, 0.2), {"resolution": 0.5, "extent": 2.0, "link": "module_02"}, rate=2.0)
-    h.update()
-    o1 = h.outputs()["map_origin"].copy()
+    out = h.outputs(0.5)
+    np.testing.assert_allclose(out["map_origin"], [-1.0, -1.0, 0.0])
+    assert out["sample_time"] == 0.5
     h.inputs.link_poses = np.tile([3.0, 1.0, 0.2, 0, 0, 0, 1.0], (ROBOT.nl, 1))
-    np.testing.assert_array_equal(h.outputs()["map_origin"], o1)                  # held until the next sample
-    assert h.update()[0] == 2.0
-    np.testing.assert_allclose(h.outputs()["map_origin"], [2.0, 0.0, 0.0])
+    out = h.outputs(1.0)
+    np.testing.assert_allclose(out["map_origin"], [2.0, 0.0, 0.0])
+    assert out["sample_time"] == 1.0
+    assert h.update(1.0)[0] == 1.0                                                 # the sample counter
 
 
 def test_sdf_volume_is_the_terrain_query_and_round_trips(tmp_path):
@@ -190,7 +190,7 @@ def test_in_a_scene_the_map_is_sampled_at_its_rate_and_recorded(tmp_path):
         connections:
           - terrain.terrain -> map.terrain
           - robot.link_poses -> map.link_poses
-        record: [map.map_origin, map.cost, map.elevation]
+        record: [map.map_origin, map.cost, map.elevation, map.sample_time]
     """))
     session = load_session(tmp_path / "s.yaml", registry=build_registry(load_entry_points=False))
     assert session.plan.components["map"].robot is session.plan.components["robot"].robot
@@ -198,9 +198,9 @@ def test_in_a_scene_the_map_is_sampled_at_its_rate_and_recorded(tmp_path):
     t = res["t"]
     cost = res["map.cost"].reshape(t.size, 60, 60)
     elev = res["map.elevation"].reshape(t.size, 60, 60)
-    late = t >= 0.5 - 1e-9                                             # the first update: t = 1/rate
-    assert (cost[~late] == -1).all()                                   # before the first sample: unknown
-    np.testing.assert_allclose(res["map.map_origin"][late], [[-3.0, -3.0, 0.0]] * late.sum(), atol=1e-12)
+    # sampled at the map's ticks (0, 0.5, ...) and held in between (the recorder reads at 10 Hz)
+    np.testing.assert_allclose(res["map.sample_time"], np.floor(t * 2.0 + 1e-9) / 2.0, atol=1e-12)
+    np.testing.assert_allclose(res["map.map_origin"], [[-3.0, -3.0, 0.0]] * t.size, atol=1e-12)
     c = cost[-1]
     assert (c == 0).mean() > 0.5 and (c == 100).any()
     assert np.nanmax(elev[-1]) > 0.1 and np.nanmin(elev[-1]) > -1e-3
