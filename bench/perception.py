@@ -19,14 +19,23 @@ rays      at each scene's initial state (the robot as the scene starts it, the t
           both) and how many beams change status; the stereo pair likewise (speed only).
 frames    the same sensors' time on a fresh instant (link rotations and bounding spheres not yet
           computed: nothing else is built per instant), in the obstacle course and the moulin.
+accuracy  the ranges of ``terrain_hits: exact`` and ``mesh`` against a reference computed without the
+          caster: a spinning-64 lidar 5 cm off the axis of a 0.3 m tube (its beams along the axis
+          graze the wall; reference: the ray-cylinder quadratic), and 20 cm above the fractal DEM
+          (terrains/fractal-dem.yaml; reference: z_ray − h sampled every 0.5 mm along the beam with
+          the contact's height query, the first sign change bisected); max and RMS error per mode,
+          the mesh's worst error over its first-order bound sag/sin θ (θ the grazing angle), and the
+          DEM cast's rays per second exact and mesh (the DEM's hits were the mesh's before its
+          refinement), best of ``--repeats``.
 rtf       the default scene (surface-screw-traverse, its dt and integrator) with a 64x1024 lidar
-          at 10 Hz and a 640x480 stereo pair at 5 Hz (``--lidar spinning-64 --stereo 640x480``),
-          the same with the sensors seeing the robot's collision shapes (``robot_geometry:
-          collision``: screw envelopes instead of blades), and without, alternately in this
-          process, best of ``--repeats`` after a warm-up; the ratio (goal: the sensors on at
-          >= 1x real time on this 2-core machine).
+          at 10 Hz and a 640x480 stereo pair at 10 Hz (``--lidar spinning-64 --stereo 640x480
+          --stereo-rate 10``: sensor_scene's ``ray_caster: raster``, the pair rasterised), the same
+          cast by Embree alone (``ray_caster: embree``: before the raster back end), the same with
+          the sensors seeing the robot's collision shapes (``robot_geometry: collision``: screw
+          envelopes instead of blades), and without sensors, alternately in this process, best of
+          ``--repeats`` after a warm-up (issue 26's goal: the sensors on at >= 5x real time).
 
-    python bench/perception.py [--repeats 3] [--duration 2] [--only rays|rtf] [--json FILE]
+    python bench/perception.py [--repeats 3] [--duration 2] [--only rays|accuracy|rtf] [--json FILE]
 """
 
 from __future__ import annotations
@@ -62,6 +71,8 @@ SCENES = {"obstacle-course": "perception-obstacle-course", "moulin": "moulin"}
 #: the ice, and its beams hit the wall from behind)
 MOUNTS = {"moulin": {"link": "module_03", "xyz": [0.3, 0.0, 0.0]}}
 DEFAULT = "surface-screw-traverse"
+#: the real-time factor's sensor rates (issue 26: both at 10 Hz)
+RTF_LIDAR_RATE, RTF_STEREO_RATE = 10.0, 10.0
 
 
 def sensor_session(scene: str, duration: float | None = None) -> Session:
@@ -238,18 +249,115 @@ def rays(scene: str, repeats: int) -> dict:
     }
 
 
+def _lidar_world(terrain, position):
+    """The sensor_scene's world on ``terrain`` (no robot visible) and a spinning-64 lidar's world rays
+    from ``position``, its frame the world's."""
+    from snakesim.components.multibody.robot_model import RobotModel
+    from snakesim.components.perception.beam_patterns import PRESETS
+    from snakesim.framework import Harness
+
+    robot = RobotModel.load(design="eels-1.0")
+    h = Harness(SensorScene, {"robot_visible": False, "extent": 8.0}, uses={"robot": robot})
+    h.inputs.terrain = terrain
+    poses = np.zeros((robot.nl, 7))
+    poses[:, 6] = 1.0
+    h.inputs.link_poses = poses
+    d = PRESETS["spinning-64"]["beams"].beams().directions
+    return h.outputs()["world"], np.broadcast_to(np.asarray(position, dtype=float), d.shape).copy(), d
+
+
+def _errors(world, o, d, reference, repeats: int = 0, keep=None):
+    """Per mode, the range error against ``reference`` (n,) m over rays both hit (and ``keep`` (n,)
+    bool, if given), and the cast's time."""
+    out = {}
+    for mode in ("exact", "mesh"):
+        cast = (lambda: world.cast_from(np.eye(3), np.zeros(3), o, d, 20.0, exact=mode == "exact")[0].distance.copy())
+        t = cast()
+        both = np.isfinite(t) & np.isfinite(reference) & (True if keep is None else keep)
+        err = np.abs(t[both] - reference[both])
+        out[mode] = {"max_m": float(err.max(initial=0.0)), "rms_m": float(np.sqrt(np.mean(err ** 2))),
+                     "rays": int(both.sum()), "distance": t}
+        if repeats:
+            out[mode]["rays_per_s"] = len(o) / best(cast, repeats)
+    return out
+
+
+def accuracy(repeats: int) -> dict:
+    from snakesim.components.terrain.spec import load_terrain
+
+    # the tube: reference from the ray-cylinder quadratic (axis x): |o⊥ + t d⊥| = R
+    radius = 0.3
+    tube = load_terrain({"kind": "tube", "radius": radius, "axis": (1.0, 0.0, 0.0)})
+    world, o, d = _lidar_world(tube, (0.0, 0.05, 0.0))
+    a, b, c = (d[:, 1:] ** 2).sum(1), (o[:, 1:] * d[:, 1:]).sum(1), (o[:, 1:] ** 2).sum(1) - radius ** 2
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ref = (-b + np.sqrt(b * b - a * c)) / a                   # from inside: the positive root
+    surf = world.terrain.surfaces
+    tri = surf.vertices[surf.faces]
+    tri = tri[np.abs(tri[:, :, 0].mean(axis=1)) < 0.2]            # one ring: every ring is alike
+    w = np.array([(i, j, 20 - i - j) for i in range(21) for j in range(21 - i)]) / 20.0
+    sag = float(np.abs(tube.query((w @ tri).reshape(-1, 3)).distance).max())
+    tube_err = _errors(world, o, d, np.where(ref <= 20.0, ref, np.inf))
+    hit = np.isfinite(tube_err["mesh"]["distance"]) & (ref <= 20.0)
+    p = o[hit] + ref[hit, None] * d[hit]
+    sin = np.abs((p[:, 1:] / radius * d[hit, 1:]).sum(1))        # |n·d|, n radial
+    ratio = float((np.abs(tube_err["mesh"]["distance"][hit] - ref[hit]) / (sag / sin)).max())
+
+    # the fractal DEM: the first sign change of z_ray − h (the contact's height), bisected
+    dem = load_terrain("terrains/fractal-dem.yaml")
+    centre = np.array([0.0, 0.0, float(dem.height(0.0, 0.0)[0]) + 0.2])
+    world_d, o_d, d_d = _lidar_world(dem, centre)
+    below = (d_d[:, 2] < 0) & (np.arange(len(d_d)) % 16 == 0)   # every 16th beam that can meet the ground
+    lo_xy, hi_xy = dem.bounds().lo[:2], dem.bounds().hi[:2]
+    step, reach = 5e-4, float(np.hypot(*(hi_xy - lo_xy)))         # 0.5 mm over the grid's diagonal
+    ref_d = np.full(len(d_d), np.inf)
+    for part in np.array_split(np.flatnonzero(below), 64):
+        s = np.arange(0.0, reach, step)
+        q = o_d[part, None] + s[None, :, None] * d_d[part, None]
+        g = q[..., 2] - dem.height(q[..., 0], q[..., 1])[0]
+        inside = np.all((q[..., :2] >= lo_xy) & (q[..., :2] <= hi_xy), axis=-1)     # the grid (the mesh's)
+        neg = (g < 0) & inside
+        k = np.where(neg.any(1), neg.argmax(1), -1)
+        ok = k > 0
+        lo, hi = s[k[ok] - 1], s[k[ok]]
+        oo, dd = o_d[part[ok]], d_d[part[ok]]
+        for _ in range(40):
+            mid = 0.5 * (lo + hi)
+            m = oo + mid[:, None] * dd
+            up = m[:, 2] - dem.height(m[:, 0], m[:, 1])[0] > 0
+            lo, hi = np.where(up, mid, lo), np.where(up, hi, mid)
+        ref_d[part[ok]] = 0.5 * (lo + hi)
+    # exact hits left on the mesh: no crossing within refine_limit past it (a triangle bulging above a
+    # grazing beam's path over the bilinear surface): counted apart, left out of the errors
+    t = world_d.cast(o_d, d_d, 20.0).distance
+    hit = np.isfinite(t)
+    p = o_d + np.where(hit, t, 0.0)[:, None] * d_d
+    on = np.abs(p[:, 2] - dem.height(p[:, 0], p[:, 1])[0]) <= 1e-9
+    kept = int(np.sum(hit & ~on))
+    dem_err = _errors(world_d, o_d, d_d, ref_d, repeats, keep=on)
+    for e in (tube_err, dem_err):
+        for m in e.values():
+            m.pop("distance")
+    return {"tube": {"radius_m": radius, "sag_m": sag, "mesh_error_over_sag_per_sin": ratio, **tube_err},
+            "dem": {"terrain": "terrains/fractal-dem.yaml", "rays": len(o_d), "hits": int(hit.sum()),
+                    "exact_hits_left_on_the_mesh": kept, **dem_err}}
+
+
 def rtf(duration: float, repeats: int) -> dict:
     reg = default_registry()
 
-    def session(sensors: bool, robot_geometry: str = "visual") -> Session:
+    def session(sensors: bool, ray_caster: str = "raster", robot_geometry: str = "visual") -> Session:
         r = resolve(DEFAULT, search_path=reg.assembly_paths(), sim_overrides={"duration": duration})
         if sensors:
-            attach_lidar(r, "spinning-64", reg)
-            attach_stereo(r, "640x480", reg)
-            r.components["sensors"].params["robot_geometry"] = robot_geometry
+            attach_lidar(r, "spinning-64", reg, rate=RTF_LIDAR_RATE)
+            attach_stereo(r, "640x480", reg, rate=RTF_STEREO_RATE)
+            r.components["sensors"].params.update(ray_caster=ray_caster, robot_geometry=robot_geometry)
         return Session(r, reg)
 
-    runs = {"off": session(False), "on": session(True), "on_collision": session(True, "collision")}
+    # on: what `snakesim run --lidar spinning-64 --stereo 640x480 --stereo-rate 10` builds (ray_caster
+    # raster: the stereo pair rasterised); on_embree: the same cast by Embree alone (before raster)
+    runs = {"off": session(False), "on": session(True), "on_embree": session(True, "embree"),
+            "on_collision": session(True, robot_geometry="collision")}
     for s in runs.values():
         s.run()                                         # warm-up: JIT, caches, first-run opening
     walls = {k: [] for k in runs}
@@ -259,10 +367,10 @@ def rtf(duration: float, repeats: int) -> dict:
             s.run()
             walls[key].append(time.perf_counter() - t0)
     w = {k: min(v) for k, v in walls.items()}
-    return {"scene": DEFAULT, "sim_time_s": duration, "wall_on_s": w["on"], "wall_off_s": w["off"],
-            "wall_on_collision_s": w["on_collision"], "rtf_on": duration / w["on"], "rtf_off": duration / w["off"],
-            "rtf_on_collision": duration / w["on_collision"], "ratio_on_off": w["on"] / w["off"],
-            "sensors": "lidar spinning-64 (64x1024) at 10 Hz, stereo 640x480 at 5 Hz"}
+    return {"scene": DEFAULT, "sim_time_s": duration, **{f"wall_{k}_s": v for k, v in w.items()},
+            **{f"rtf_{k}": duration / v for k, v in w.items()}, "ratio_on_off": w["on"] / w["off"],
+            "sensors": f"lidar spinning-64 (64x1024) at {RTF_LIDAR_RATE:g} Hz, "
+                       f"stereo 640x480 at {RTF_STEREO_RATE:g} Hz"}
 
 
 def main(argv=None) -> int:
@@ -270,9 +378,9 @@ def main(argv=None) -> int:
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--duration", type=float, default=2.0, help="simulated s per real-time-factor run")
     ap.add_argument("--json", dest="json_path")
-    ap.add_argument("--only", choices=("rays", "rtf"), help="one part (default: both)")
+    ap.add_argument("--only", choices=("rays", "accuracy", "rtf"), help="one part (default: all)")
     a = ap.parse_args(argv)
-    results = [rays(name, a.repeats) for name in SCENES] if a.only != "rtf" else []
+    results = [rays(name, a.repeats) for name in SCENES] if a.only in (None, "rays") else []
     print(f"{'scene':>28} {'sensor':>8} {'rays':>8} {'raw Mray/s':>10} {f'raw x{THREADS}':>8} {'pipe Mray/s':>11} "
           f"{'pipe/raw':>8} {f'pipe/raw x{THREADS}':>13} {'frame ms':>9}")
     for r in results:
@@ -290,14 +398,30 @@ def main(argv=None) -> int:
               f"({1e3 * r['robot_scenes_build_s']:.0f} ms); terrain {r['terrain_faces']} faces")
     print(f"target: pipeline/raw >= 0.7; raw = one embreex run() call, raw x{THREADS} = the rays split in {THREADS} "
           "threads as the pipeline splits them; frame = pipeline with the instant's link spheres computed")
-    t = rtf(a.duration, a.repeats) if a.only != "rays" else {}
+    acc = accuracy(a.repeats) if a.only in (None, "accuracy") else {}
+    if acc:
+        tb, dm = acc["tube"], acc["dem"]
+        print("\nrange error against the reference (spinning-64; rays both hit; DEM: every 16th beam), "
+              "max / rms mm:")
+        print(f"{'terrain':>28} {'exact':>16} {'mesh':>16}")
+        for name, e in ((f"tube r {tb['radius_m']:g} m (sag {1e3 * tb['sag_m']:.2f} mm)", tb),
+                        ("fractal DEM", dm)):
+            print(f"{name:>28} " + " ".join(f"{1e3 * e[m]['max_m']:7.3g} / {1e3 * e[m]['rms_m']:<6.2g}"
+                                             for m in ("exact", "mesh")))
+        print(f"{'':>28} tube mesh: worst error / (sag / sin θ) = {tb['mesh_error_over_sag_per_sin']:.4f}")
+        print(f"{'':>28} DEM cast {dm['rays']} rays: exact {dm['exact']['rays_per_s'] / 1e6:.2f} Mray/s, "
+              f"mesh {dm['mesh']['rays_per_s'] / 1e6:.2f} Mray/s; {dm['exact_hits_left_on_the_mesh']} of "
+              f"{dm['hits']} exact hits left on the mesh (no crossing within refine_limit past it; not in the table)")
+    t = rtf(a.duration, a.repeats) if a.only in (None, "rtf") else {}
     if t:
-        print(f"\n{t['scene']}, {t['sim_time_s']:g} s, best of {a.repeats}: sensors off {t['rtf_off']:.3f}x real time, "
-              f"on {t['rtf_on']:.3f}x ({t['sensors']}), on seeing the robot's collision shapes "
-              f"{t['rtf_on_collision']:.3f}x; wall ratio on/off {t['ratio_on_off']:.2f} (goal: on >= 1x)")
+        print(f"\n{t['scene']}, {t['sim_time_s']:g} s, best of {a.repeats} (alternating): sensors off "
+              f"{t['rtf_off']:.2f}x real time; on ({t['sensors']}) {t['rtf_on']:.2f}x (ray_caster raster), "
+              f"{t['rtf_on_embree']:.2f}x (embree), {t['rtf_on_collision']:.2f}x (raster, robot's collision shapes); "
+              f"wall ratio on/off {t['ratio_on_off']:.2f} (goal: on >= 5x)")
     if a.json_path:
         with open(a.json_path, "w") as f:
-            json.dump({"machine": platform.platform(), "python": sys.version.split()[0], "rays": results, "rtf": t},
+            json.dump({"machine": platform.platform(), "python": sys.version.split()[0], "rays": results,
+                       "accuracy": acc, "rtf": t},
                       f, indent=2)
     return 0
 

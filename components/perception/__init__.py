@@ -10,11 +10,13 @@ Shared pieces: where a sensor sits (mount.py), what it sees (surfaces.py), how r
 cast (ray_casting.py: the RayCaster protocol sensors cast into, the back-end registry;
 ray_caster.py: the embree back end, the terrain's and each link's static Embree scene;
 hit_kernels.py; refine_kernels.py: exact hits on tubes and moulins), how surfaces reflect
-(reflectance.py).
+(reflectance.py), what each beam and pixel hit (labels.py: the ground-truth label scheme), a
+lidar's own motion during its sweep (motion.py).
 """
 
 from .camera import Camera, CameraFrame, StereoCamera
 from .filters import ColorAdjust, Gamma, ImageFilter, ImageNoise, Vignetting
+from .labels import label_name
 from .lidar import Lidar, LidarScan
 from .ray_caster import EmbreeWorld, RayHits, SensorWorld
 from .ray_casting import RayCaster, RayCasterBackend, ray_casters
@@ -25,4 +27,4 @@ PERCEPTION = (SensorScene, Lidar, Camera, StereoCamera, ImageNoise, Vignetting, 
 
 __all__ = ["PERCEPTION", "Camera", "CameraFrame", "ColorAdjust", "EmbreeWorld", "Gamma", "ImageFilter", "ImageNoise",
            "Lidar", "LidarScan", "RayCaster", "RayCasterBackend", "RayHits", "SensorScene", "SensorWorld",
-           "StereoCamera", "Vignetting", "ray_casters"]
+           "StereoCamera", "Vignetting", "label_name", "ray_casters"]

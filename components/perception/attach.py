@@ -4,9 +4,9 @@ Finds, by what the classes declare (never by names): the component providing the
 (``Provides(RobotModel)``) and its LINK_POSES output, and the first Terrain output. Adds
 one ``sensor_scene`` (``sensors``) wired to both, then
 
-    --lidar PRESET    ``lidar``: the preset (beam_patterns.PRESETS) at 10 Hz on the robot's
+    --lidar PRESET    ``lidar``: the preset (beam_patterns.PRESETS) at 10 Hz (``--lidar-rate``) on the robot's
                       ``lidar`` link (the EELS heads' lidar frame)
-    --stereo WxH      ``stereo``: a 90° pinhole pair, 6.75 cm baseline, W×H pixels, at 5 Hz,
+    --stereo WxH      ``stereo``: a 90° pinhole pair, 6.75 cm baseline, W×H pixels, at 5 Hz (``--stereo-rate``),
                       on the ``camera_left`` link (optical: looking along the link's x)
 
 A robot without those links is a clear error at build (the mount names the link and lists
@@ -58,7 +58,9 @@ def _scene(resolved: Resolved, registry) -> str:
     if SCENE in resolved.components:
         raise ConfigError(f"the scene already has a component named '{SCENE}'", "--lidar/--stereo")
     robot, poses, terrain = _robot_and_terrain(resolved, registry or default_registry())
-    resolved.components[SCENE] = ComponentSpec(type="sensor_scene", uses={"robot": robot})
+    # raster: the stereo pair's pinhole images rasterised (.raster), the lidar cast by Embree as before
+    resolved.components[SCENE] = ComponentSpec(type="sensor_scene", uses={"robot": robot},
+                                               params={"ray_caster": "raster"})
     resolved.connections.append((poses, f"{SCENE}.link_poses", "--lidar/--stereo"))
     if terrain is not None:
         resolved.connections.append((terrain, f"{SCENE}.terrain", "--lidar/--stereo"))
@@ -75,11 +77,21 @@ def _add(resolved: Resolved, name: str, spec: ComponentSpec, scene: str, option:
     resolved.where[name] = option
 
 
-def attach_lidar(resolved: Resolved, preset: str, registry=None) -> None:
+def _rate(rate, default: float, option: str) -> float:
+    if rate is None:
+        return default
+    if not (isinstance(rate, (int, float)) and 0 < rate < float("inf")):
+        raise ConfigError(f"{option}: {rate!r} is not a rate; give a positive number of Hz, e.g. 10", option)
+    return float(rate)
+
+
+def attach_lidar(resolved: Resolved, preset: str, registry=None, rate: float | None = None) -> None:
+    """Add the head lidar ``preset`` at ``rate`` Hz (default LIDAR_RATE)."""
+    rate = _rate(rate, LIDAR_RATE, "--lidar-rate")
     if preset not in PRESETS:
         raise ConfigError(f"--lidar: '{preset}' is not a lidar preset; valid: {', '.join(PRESETS)}", "--lidar")
     scene = _scene(resolved, registry)
-    _add(resolved, LIDAR, ComponentSpec(type="lidar", rate=LIDAR_RATE, params={"link": "lidar", "preset": preset}),
+    _add(resolved, LIDAR, ComponentSpec(type="lidar", rate=rate, params={"link": "lidar", "preset": preset}),
          scene, "--lidar")
 
 
@@ -91,7 +103,9 @@ def parse_size(text: str) -> tuple[int, int]:
     return int(parts[0]), int(parts[1])
 
 
-def attach_stereo(resolved: Resolved, size: str, registry=None) -> None:
+def attach_stereo(resolved: Resolved, size: str, registry=None, rate: float | None = None) -> None:
+    """Add the head stereo pair of ``size`` ('WxH') at ``rate`` Hz (default CAMERA_RATE)."""
+    rate = _rate(rate, CAMERA_RATE, "--stereo-rate")
     try:
         w, h = parse_size(size)
         from .camera import check_camera_size
@@ -101,7 +115,7 @@ def attach_stereo(resolved: Resolved, size: str, registry=None) -> None:
     scene = _scene(resolved, registry)
     params = {"link": "camera_left", "width": w, "height": h, "baseline": 0.0675,
               "model": {"kind": "pinhole", "fov": 90.0}}
-    _add(resolved, STEREO, ComponentSpec(type="stereo_camera", rate=CAMERA_RATE, params=params), scene, "--stereo")
+    _add(resolved, STEREO, ComponentSpec(type="stereo_camera", rate=rate, params=params), scene, "--stereo")
 
 
 #: run options whose sinks take every sensor output (a LIDAR_SCAN or CAMERA_FRAME role): what each does with it

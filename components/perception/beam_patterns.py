@@ -6,13 +6,19 @@ x forward, y left, z up; m).
              ``horizontal_fov`` deg centred on +x (360: the full turn, no repeated seam);
              beam (ring i, column j) is row-major index i·columns + j (an organised cloud),
              direction (cos e cos a, cos e sin a, sin e), azimuth a decreasing with j
-             (left to right seen from above, as a spinning unit sweeps clockwise)
+             (left to right seen from above, as a spinning unit sweeps clockwise); the
+             column at azimuth a fires at fraction ((π − a) mod 2π)/2π of the period (the sweep
+             starts behind, at ±180°, and turns clockwise: a 360° grid's column j at (j + ½)/columns)
     file     user beams: CSV (header line optional; 3 columns dx, dy, dz or 6 columns
              ox, oy, oz, dx, dy, dz) or .npy of shape (n, 3) or (n, 6); directions must be
              unit (|d| within 1e-6 of 1) and finite
     rosette  a Risley-prism solid-state scanner's non-repeating petals (Livox-like):
              deflection (a_y, a_z) = (A/2)·(cos 2πfs + cos 2πgs, sin 2πfs − sin 2πgs),
-             s = k/n over one frame, A the half field of view; forward-looking
+             s = k/n over one frame, A the half field of view; forward-looking; beam k fires at
+             fraction s of the frame
+
+Firing fractions s ∈ [0, 1) place each beam in the sample's period T (.lidar: beam k fires at
+t − (1 − s_k)·T, t the sample's stamp); a file gives none (every beam at the stamp).
 
 PRESETS are the head lidars of the EELS designs, turned on with ``preset: NAME``.
 """
@@ -33,12 +39,14 @@ UNIT_TOL = 1e-6
 @dataclasses.dataclass(frozen=True)
 class BeamPattern:
     """origins (n, 3) m and unit directions (n, 3), lidar frame; ring (n,) channel index;
-    ``shape`` (rows, columns) when the beams form an organised grid, else None."""
+    ``shape`` (rows, columns) when the beams form an organised grid, else None; ``fire`` (n,) the
+    fraction of the period at which each beam fires (module docstring), None when unknown."""
 
     origins: np.ndarray
     directions: np.ndarray
     ring: np.ndarray
     shape: tuple[int, int] | None
+    fire: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.directions)
@@ -74,7 +82,8 @@ class BeamGrid(_Spec):
         E, A = np.meshgrid(el, az, indexing="ij")
         d = np.stack([np.cos(E) * np.cos(A), np.cos(E) * np.sin(A), np.sin(E)], axis=-1).reshape(-1, 3)
         ring = np.repeat(np.arange(self.channels), h)
-        return BeamPattern(np.zeros_like(d), d, ring, (self.channels, h))
+        fire = np.tile(np.mod(np.pi - az, 2 * np.pi) / (2 * np.pi), self.channels)
+        return BeamPattern(np.zeros_like(d), d, ring, (self.channels, h), fire)
 
 
 class BeamRosette(_Spec):
@@ -91,7 +100,7 @@ class BeamRosette(_Spec):
         az = 0.5 * a * (np.sin(f) - np.sin(g))
         d = np.stack([np.ones_like(ay), np.tan(ay), np.tan(az)], axis=1)
         d /= np.linalg.norm(d, axis=1, keepdims=True)
-        return BeamPattern(np.zeros_like(d), d, np.zeros(len(d), dtype=np.int64), None)
+        return BeamPattern(np.zeros_like(d), d, np.zeros(len(d), dtype=np.int64), None, s)
 
 
 class BeamFile(_Spec):

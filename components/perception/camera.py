@@ -12,11 +12,15 @@ x forward, into the optical frame, z forward). The ray is cast against the
                                                of the material; E the light's irradiance: a
                                                ``sun`` (optional shadow rays) or a ``headlamp``
                                                at the camera (falls off as 1/r²)
+    label  what the pixel's ray hit            .labels: nothing, terrain material, robot link,
+                                               obstacle (uint16)
 
-Pixels whose ray hits nothing within max_range have NaN range and depth and the
-``background`` value. Image values are linear radiance, unbounded (1 = a white surface
-square-on to unit irradiance); the filters after a camera (.filters) add noise, vignetting,
-gamma and colour, and an 8-bit sink saturates at 1.
+Pixels whose ray hits nothing within max_range have NaN range and depth, label 0 and the
+``background`` value. ``texture_contrast`` scales the terrain materials' texture contrasts
+(0: featureless ice, what defeats visual odometry; 1: as the materials say). Image values
+are linear radiance, unbounded (1 = a white surface square-on to unit irradiance); the
+filters after a camera (.filters) add noise, vignetting, gamma and colour, and an 8-bit sink
+saturates at 1.
 
 ``camera``         one view:     out ``frame``
 ``stereo_camera``  a synchronised pair, the right camera ``baseline`` m along the left's
@@ -44,18 +48,20 @@ from .mount import SensorMount, mount_on, quaternion_xyzw
 from .ray_caster import CastBuffers, RayBundle, in_chunks, interleaved
 from .ray_casting import RayCaster
 from .hit_kernels import develop
+from .labels import LABEL_DTYPE, labels_of, scatter
 
 Vec3 = tuple[float, float, float]
 #: shadow rays start this far off the surface (m), so a surface does not shadow itself
 SHADOW_OFFSET = 1e-4
 #: bytes a camera holds a pixel whatever it renders: its rays (the model's, in cast order, contiguous
-#: copies: 2 x 48), indices (16), the binned bundle (~16) and the reused cast buffers (CastBuffers: ~190)
-RAY_BYTES_PER_PIXEL = 320
+#: copies: 2 x 48), indices (16), the binned bundle (~16) and the reused cast buffers (CastBuffers: ~190, with
+#: the labels)
+RAY_BYTES_PER_PIXEL = 322
 
 
 def frame_bytes_per_pixel(color: bool) -> int:
-    """Bytes a rendered frame takes a pixel: image (grey float32, or RGB), range, depth, shadow mask."""
-    return (12 if color else 4) + 4 + 4 + 1
+    """Bytes a rendered frame takes a pixel: image (grey float32, or RGB), range, depth, shadow mask, label."""
+    return (12 if color else 4) + 4 + 4 + 1 + 2
 
 
 def camera_memory_bytes(width: int, height: int, views: int = 1, color: bool = False) -> float:
@@ -86,7 +92,8 @@ class CameraFrame:
     """One camera image. t s; ``frame`` the camera's optical frame name; ``model`` its
     CameraModel; image (h, w) grey or (h, w, 3) linear RGB float32; depth and range (h, w)
     float32 m (NaN where nothing is hit); pose (7,) the optical frame in the world
-    [x, y, z, qx, qy, qz, qw]; ``seq`` the sample number."""
+    [x, y, z, qx, qy, qz, qw]; ``seq`` the sample number; label (h, w) uint16 what each pixel's
+    ray hit (.labels, 0 for nothing)."""
 
     t: float
     frame: str
@@ -96,6 +103,7 @@ class CameraFrame:
     range: np.ndarray
     pose: np.ndarray
     seq: int
+    label: np.ndarray | None = None
 
     def with_image(self, image: np.ndarray) -> "CameraFrame":
         """This frame with another image (what a filter returns)."""
@@ -136,6 +144,8 @@ class CameraParams(SensorMount, Params):
     near: float = Field(0.01, ge=0, description="m, nothing nearer is seen (rays start here)")
     max_range: float = Field(100.0, gt=0, description="m, nothing farther is seen")
     background: float = Field(0.0, ge=0, description="image value where nothing is hit")
+    texture_contrast: float = Field(1.0, ge=0, le=1, description="terrain materials' texture contrasts times "
+                                                                  "this (0: featureless)")
     terrain_hits: Literal["exact", "mesh"] = Field(
         "exact", description="exact: hits on a curved analytic terrain refined onto its surface (Newton); "
                              "mesh: the tessellation's hits (sensor_scene's cell), faster")
@@ -170,6 +180,7 @@ class _Camera(Component):
         self._rays = self._rays[interleaved(len(self._rays))]
         self._o, self._d = np.ascontiguousarray(o[self._rays]), np.ascontiguousarray(d[self._rays])
         self._bundle = RayBundle(self._o, self._d)             # binned once: finds the rays near the robot
+        self._bundle.image = (p.width, p.height, self._rays)   # which pixel each ray is: a back end may rasterise
         self._buffers = CastBuffers(len(self._d))              # reused by every render (hits are used at once)
         self.row, self.R_ls, self.p_ls = mount_on(self.robot, p, self.name, optical=p.optical)
         self.frame_id = p.name or self.name
@@ -192,8 +203,9 @@ class _Camera(Component):
                frame: str) -> CameraFrame:
         prm, light = self.p, self.p.light
         h, w = prm.height, prm.width
+        extra = {} if prm.texture_contrast == 1.0 else {"texture_contrast": prm.texture_contrast}
         hits, o_w, d_w = world.cast_from(R, p_w, self._o, self._d, prm.max_range, prm.near, self._bundle,
-                                            self._buffers, prm.terrain_hits == "exact")
+                                            self._buffers, prm.terrain_hits == "exact", **extra)
         headlamp = light.kind == "headlamp"
         shadowed = np.zeros(len(d_w), dtype=np.bool_)
         if not headlamp and light.shadows:
@@ -205,13 +217,20 @@ class _Camera(Component):
         image = np.full((h * w, channels), prm.background, dtype=np.float32)
         rng = np.full(h * w, np.nan, dtype=np.float32)
         depth = np.full(h * w, np.nan, dtype=np.float32)
+        label = np.zeros(h * w, dtype=LABEL_DTYPE)
+        ray_label = labels_of(hits)
         reflect = hits.color if prm.color else hits.albedo[:, None]
-        in_chunks(lambda c, k: develop(self._rays[k], self._o[k, 2], self._d[k, 2], d_w[k], hits.distance[k],
-                                       hits.normal[k], reflect[k], headlamp, self._sun, light.intensity, light.ambient,
-                                       light.reference_range, shadowed[k], image, depth, rng), len(d_w))
+
+        def pixels(c, k):
+            develop(self._rays[k], self._o[k, 2], self._d[k, 2], d_w[k], hits.distance[k], hits.normal[k],
+                    reflect[k], headlamp, self._sun, light.intensity, light.ambient, light.reference_range,
+                    shadowed[k], image, depth, rng)
+            scatter(self._rays[k], ray_label[k], label)
+
+        in_chunks(pixels, len(d_w))
         img = image.reshape(h, w, channels)
         return CameraFrame(t, frame, self.model, img if prm.color else img[:, :, 0], depth.reshape(h, w),
-                           rng.reshape(h, w), np.r_[p_w, quaternion_xyzw(R)], seq)
+                           rng.reshape(h, w), np.r_[p_w, quaternion_xyzw(R)], seq, label.reshape(h, w))
 
 
 class Camera(_Camera, Component[CameraParams]):

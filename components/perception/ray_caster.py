@@ -33,11 +33,13 @@ onto the true surface in float64 by Newton's method on the signed distance along
 f(t) = d(o + t·r), f'(t) = n·r, so a plane, wall or tube returns its exact range, not its
 tessellation's (until the error left is below a nanometre, REFINE_TOLERANCE; a step larger than
 ``refine_limit`` keeps the mesh hit; compiled for the Fourier-cylinder kinds, tube and
-moulin: .refine_kernels).
-Only hits on faces that approximate a curve are refined (``TerrainSurfaces.refine``): a
-plane's faces are the plane. A cast can skip it (``exact=False``: a sensor's
-``terrain_hits: mesh``), and leaves unrefined the mesh hits nearer than ``refine_beyond``
-whose ray is inside the terrain there (a lidar's minimum range: such a hit only blocks).
+moulin: .refine_kernels). A DEM's hits are solved onto its bilinear surface, cell by cell
+from the ray's origin (the kind's ``refiner``: .refine_kernels.DemRefiner).
+Only hits on faces that approximate a curve are refined (``TerrainSurfaces.refine``; a DEM:
+every face): a plane's faces are the plane. A cast can skip it (``exact=False``: a sensor's
+``terrain_hits: mesh``; its hits are then off along the ray by up to sag/sin θ, θ the grazing
+angle, not the sag: docs/perception.md), and leaves unrefined the mesh hits nearer than
+``refine_beyond`` whose ray is inside the terrain there (a lidar's minimum range: such a hit only blocks).
 
 The cast runs on ``THREADS`` threads (numba's thread count, the CPU count unless
 NUMBA_NUM_THREADS says otherwise; embreex and the compiled kernels release the GIL): the
@@ -54,13 +56,21 @@ arrays (``CastBuffers``) from one sample to the next.
 Results (``RayHits``): ``distance`` (n,) m along the ray, inf where nothing is hit
 within [min_range, max_range]; for the hit rays (``hit``), ``normal`` (n, 3) unit, world,
 facing the ray; ``albedo`` (n,), ``color`` (n, 3); ``link`` (n,) the link row hit, −1 for
-terrain or nothing (the other fields of a missed ray are unset).
+terrain or nothing (the other fields of a missed ray are unset); ``label`` (n,) uint16 what the
+ray hit (.labels: nothing, terrain material, robot link, obstacle), every ray.
+
+A sensor that moves during its sample (a spinning lidar's motion distortion, .motion) passes
+its rays as they were fired, each from the sensor's pose at its own instant expressed in the
+current sensor frame, with the bundle of its nominal rays (``RayBundle.for_moved``): the terrain
+is cast along the moved rays, the robot (which moves with its sensor) along the nominal ones.
 """
 
 from __future__ import annotations
 
 import concurrent.futures
+import copy
 import dataclasses
+import functools
 import itertools
 import math
 import os
@@ -72,6 +82,7 @@ from snakesim.components.multibody.pose_quaternions import rotation_matrices
 
 from .hit_kernels import (bundle_link_rays, finish_hits, link_candidates, link_cones, link_rays, rays_to_world,
                           take_link_hits, take_mount_hits, tighten)
+from .labels import LABEL_DTYPE, ray_labels, relabel_refined, terrain_face_labels
 from .ray_casting import RayCaster, RayCasterBackend
 from .refine_kernels import FourierRefiner
 from .surfaces import RobotSurfaces, TerrainSurfaces, optical_table
@@ -109,6 +120,8 @@ class RayHits:
     albedo: np.ndarray
     color: np.ndarray
     link: np.ndarray
+    #: .labels (a back end may leave it None: sensors then label from ``link`` alone, .labels.labels_of)
+    label: np.ndarray | None = None
 
     @property
     def hit(self) -> np.ndarray:
@@ -125,7 +138,8 @@ class CastBuffers:
         self.n = n
         self.o_w, self.d_w = np.empty((n, 3)), np.empty((n, 3))
         self.start32, self.d32 = np.empty((n, 3), np.float32), np.empty((n, 3), np.float32)
-        self.hits = RayHits(np.empty(n), np.empty((n, 3)), np.empty(n), np.empty((n, 3)), np.empty(n, dtype=np.int64))
+        self.hits = RayHits(np.empty(n), np.empty((n, 3)), np.empty(n), np.empty((n, 3)), np.empty(n, dtype=np.int64),
+                            np.empty(n, dtype=LABEL_DTYPE))
         self.material, self.refine = np.empty(n, dtype=np.int64), np.empty(n, dtype=np.bool_)
         self.best, self.src = np.empty(n, dtype=np.float32), np.empty(n, dtype=np.int8)
         self.face, self.ng_r = np.empty(n, dtype=np.int64), np.empty((n, 3))
@@ -154,6 +168,7 @@ def _intersect(scene, origins32, dirs32, far32):
 
 
 _NO_TERRAIN = (np.zeros(0, np.int32), np.zeros(0, np.int32), np.zeros((0, 3), np.float32))
+_NO_FACES = np.zeros(0, np.int64)
 
 
 class StaticTerrainScene:
@@ -167,15 +182,31 @@ class StaticTerrainScene:
         self._texture = texture_table(surfaces.terrain.materials)
         self.textured = bool((self._texture[:, 0] != 0).any())
         self.tables = (surfaces.albedo, surfaces.color, surfaces.refine, surfaces.material)
-        # Fourier-cylinder kinds (tube, moulin): the Newton iteration compiled (.refine_kernels)
+        #: per face its ground-truth label (.labels: an obstacle field's faces their obstacle's)
+        self.face_label = terrain_face_labels(surfaces.terrain, surfaces.vertices, surfaces.faces, surfaces.material)
+        self._contrast_tables = {1.0: self._texture}
+        # the kind's compiled refinement (``Terrain.refiner``, .refine_kernels): tube, moulin: Newton;
+        # DEM: the bilinear surface's first crossing
         self.refiner = (FourierRefiner.for_terrain(surfaces.terrain, surfaces.vertices, self.refine_limit + 1.0)
                         if surfaces.refine.any() else None)
 
+    def texture(self, contrast: float = 1.0) -> np.ndarray:
+        """The texture table with every material's contrast times ``contrast`` (a sensor's
+        ``texture_contrast``: 0 featureless, 1 as the materials say), made once per value."""
+        table = self._contrast_tables.get(contrast)
+        if table is None:
+            table = self._texture.copy()
+            table[:, 2] = np.clip(table[:, 2] * contrast, 0.0, 1.0)
+            if len(self._contrast_tables) > 8:          # a few sensors' values at most
+                self._contrast_tables = {1.0: self._texture}
+            self._contrast_tables[contrast] = table
+        return table
+
     def finish(self, o, d, out: RayHits, material: np.ndarray, refine: np.ndarray, exact: bool = True,
-               refine_beyond: float = 0.0) -> None:
+               refine_beyond: float = 0.0, texture_contrast: float = 1.0) -> None:
         """Refine the hits on curved faces onto the exact surface (``exact``; compiled kinds: not
         the mesh hits nearer than ``refine_beyond`` whose ray is inside the terrain there, which
-        only block); apply material textures."""
+        only block); apply material textures (their contrasts times ``texture_contrast``)."""
         curved = np.flatnonzero(refine) if exact else np.zeros(0, dtype=np.int64)
         if curved.size and self.refiner is not None:
             in_chunks(lambda c, k: self.refiner.refine(o, d, curved[k], REFINE_ITERATIONS, REFINE_TOLERANCE, GRAZING,
@@ -189,7 +220,8 @@ class StaticTerrainScene:
             out.albedo[good], out.color[good] = self._albedo[mat[ok]], self._color[mat[ok]]
             material[good] = mat[ok]
         if self.textured:
-            in_chunks(lambda c, k: apply_textures(self._texture, material[k], o[k], d[k], out.distance[k],
+            table = self.texture(float(texture_contrast))
+            in_chunks(lambda c, k: apply_textures(table, material[k], o[k], d[k], out.distance[k],
                                                   out.albedo[k], out.color[k]), len(material))
 
     def _refine(self, o, d, t):
@@ -297,6 +329,9 @@ class RayBundle:
             self.mount = (int(row), np.array(R_ls, dtype=np.float64).reshape(3, 3),
                           np.array(p_ls, dtype=np.float64).reshape(3))
         self._mount_hits = {}
+        #: (width, height, pixel index per ray) when the rays are an image's pixels (a camera's: a
+        #: back end may rasterise it, .raster); None otherwise
+        self.image = None
         self.centre = o.mean(axis=0) if len(o) else np.zeros(3)
         self.radius = float(np.linalg.norm(o - self.centre, axis=1).max()) * (1 + 1e-9) if len(o) else 0.0
         n, N = len(d), self.BINS
@@ -321,6 +356,16 @@ class RayBundle:
         # the rays in bin order, contiguous: a cast reads them bin by bin
         self.binned_origins = np.ascontiguousarray(o[order])
         self.binned_directions = np.ascontiguousarray(d[order])
+
+    def for_moved(self, directions: np.ndarray) -> "RayBundle":
+        """This bundle standing for ``directions`` (with their origins): the same rays, each moved by the
+        sensor's own motion up to its firing instant (a lidar's motion distortion, .motion), in an array the
+        sensor reuses from one sample to the next. A cast with it casts the terrain along the moved rays and
+        the robot, which moves with its sensor, along this bundle's nominal rays (the mount link's hits
+        cast once, as ever). Shares everything with this bundle."""
+        moved = copy.copy(self)
+        moved.source = directions
+        return moved
 
     def link_cones(self, R, p, centres, radii, reach_max: float, link_R=None, link_p=None, box=None):
         """Each link's cone in the sensor frame, the sensor at (R, p): (axis (L, 3), cos, sin of the
@@ -391,11 +436,13 @@ def _pool() -> concurrent.futures.ThreadPoolExecutor:
     return _POOL[1]
 
 
-def chunks(n: int, minimum: int = CHUNK_MIN) -> list[slice]:
-    """The ranges n rays are split into (SPLIT per thread; one when n < 2·minimum)."""
+@functools.lru_cache(maxsize=256)
+def chunks(n: int, minimum: int = CHUNK_MIN) -> tuple[slice, ...]:
+    """The ranges n rays are split into (SPLIT per thread; one when n < 2·minimum); kept per (n,
+    minimum): a frame asks for its sensors' few sizes many times (~1.5 ms a frame made afresh)."""
     k = max(1, min(THREADS * SPLIT if THREADS > 1 else 1, n // minimum))
     edges = np.linspace(0, n, k + 1).astype(int)
-    return [slice(a, b) for a, b in zip(edges[:-1], edges[1:])]
+    return tuple(slice(int(a), int(b)) for a, b in zip(edges[:-1], edges[1:]))
 
 
 def interleaved(n: int) -> np.ndarray:
@@ -469,7 +516,7 @@ class EmbreeWorld(RayCaster):
 
     def cast_from(self, R, p, origins, directions, max_range: float, min_range: float = 0.0,
                   bundle: RayBundle | None = None, buffers: CastBuffers | None = None, exact: bool = True,
-                  refine_beyond: float = 0.0):
+                  refine_beyond: float = 0.0, texture_contrast: float = 1.0):
         """Rays given in a sensor frame at (R, p) in the world: -> (hits, world origins, world
         directions). ``bundle``: the same rays binned (a sensor's, made once), which finds the
         rays that can meet the robot faster than testing each ray against each link (and, with a
@@ -477,7 +524,8 @@ class EmbreeWorld(RayCaster):
         of as many rays, written over (else fresh arrays). ``exact``: terrain hits on curved
         faces refined onto the analytic surface (False: the mesh's hits, as Embree returns them);
         ``refine_beyond`` m: a mesh hit nearer than this whose ray is inside the terrain there is
-        not refined (it only blocks: a lidar's minimum range; its distance stays below this)."""
+        not refined (it only blocks: a lidar's minimum range; its distance stays below this);
+        ``texture_contrast``: the terrain materials' texture contrasts times this (0: featureless)."""
         n = len(origins)
         b = buffers if buffers is not None and buffers.n == n else CastBuffers(n)
         o_w, d_w, start32, d32 = b.o_w, b.d_w, b.start32, b.d32
@@ -485,7 +533,6 @@ class EmbreeWorld(RayCaster):
         if bundle is not None and bundle.source is not directions:
             raise ValueError("cast_from: the bundle was made from other rays than the directions given")
         # rows of missed rays are left unset except distance (inf): readers select hits first
-        out, material, refine = b.hits, b.material, b.refine
         lo, hi = float(min_range), float(max_range)
         ter, rob = self.terrain, self.robot
         # the links' candidate rays need no cast: found on the other thread while this one starts
@@ -505,16 +552,36 @@ class EmbreeWorld(RayCaster):
             self._cast_bundle_robot(R, p, bundle, lo, hi, b, *robot)
         elif rob is not None and n:
             self._cast_robot(o_w, d_w, lo, b)
+        return self._finish_cast(b, o_w, d_w, lo, hi, terrain_hits, exact, refine_beyond, texture_contrast)
+
+    def _finish_cast(self, b: CastBuffers, o_w, d_w, lo: float, hi: float, terrain_hits: list, exact: bool,
+                     refine_beyond: float, texture_contrast: float):
+        """After visibility (per ray: ``b.best``, ``b.src``, a robot hit's ``b.face``, ``b.ng_r``; per
+        chunk of chunks(n, CAST_CHUNK_MIN) the terrain's (geomID, primID, Ng)): the hits' fields and
+        labels, the refinement onto curved terrain and textures. -> (hits, o_w, d_w)."""
+        n = len(d_w)
+        out, material, refine = b.hits, b.material, b.refine
+        ter, rob = self.terrain, self.robot
+        max_range = hi
         tables_t = ter.tables if ter is not None else _EMPTY_TERRAIN
         tables_r = rob.tables if rob is not None else _EMPTY_ROBOT
-        in_chunks(lambda c, sl: finish_hits(d_w[sl], lo, hi, b.best[sl], b.src[sl], b.face[sl], b.ng_r[sl],
-                                            *terrain_hits[c], *tables_t, *tables_r, out.distance[sl],
-                                            out.normal[sl], out.albedo[sl], out.color[sl], out.link[sl],
-                                            material[sl], refine[sl]), n, CAST_CHUNK_MIN)
+        face_label = ter.face_label if ter is not None else _NO_FACES
+
+        def finish(c, sl):                   # the hits, and their labels while the chunk is in cache
+            finish_hits(d_w[sl], lo, hi, b.best[sl], b.src[sl], b.face[sl], b.ng_r[sl], *terrain_hits[c], *tables_t,
+                        *tables_r, out.distance[sl], out.normal[sl], out.albedo[sl], out.color[sl], out.link[sl],
+                        material[sl], refine[sl])
+            ray_labels(out.distance[sl], out.link[sl], material[sl], terrain_hits[c][0], terrain_hits[c][1],
+                       face_label, out.label[sl])
+
+        in_chunks(finish, n, CAST_CHUNK_MIN)
         if ter is not None and ((exact and refine.any()) or ter.textured):
-            ter.finish(o_w, d_w, out, material, refine, exact, refine_beyond)      # distances are from the origins
+            ter.finish(o_w, d_w, out, material, refine, exact, refine_beyond,        # distances are from the origins
+                       texture_contrast)
             far = out.distance > max_range        # a refined hit may move past the range by rounding
             out.distance[far] = np.inf
+            if exact:                             # refinement may move a hit onto another material, or out of range
+                relabel_refined(np.flatnonzero(refine), out.distance, material, out.label)
         return out, o_w, d_w
 
     def _robot_rays(self, R, p, bundle: RayBundle, lo: float, hi: float):

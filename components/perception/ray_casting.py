@@ -38,7 +38,8 @@ class RayCaster(Protocol):
     """The physical scene at one instant, as the sensors cast into it (methods only, so that
     ``issubclass`` checks a class structurally). Arrays are float64; results are
     :class:`~.ray_caster.RayHits` (``distance`` (n,) m, inf on a miss; for the hit rays ``normal``
-    (n, 3) unit world facing the ray, ``albedo``, ``color``, ``link`` the link row or −1)."""
+    (n, 3) unit world facing the ray, ``albedo``, ``color``, ``link`` the link row or −1; ``label``
+    (n,) uint16 what each ray hit, .labels, or None where a back end cannot tell)."""
 
     def link_pose(self, row: int) -> tuple[np.ndarray, np.ndarray]:
         """(R (3, 3), p (3,)) of robot link ``row`` (a ``link_poses`` row) in the world: where a
@@ -53,11 +54,14 @@ class RayCaster(Protocol):
                   refine_beyond: float = 0.0) -> tuple[RayHits, np.ndarray, np.ndarray]:
         """Rays given in a sensor frame posed at (R, p) in the world (rays start at min_range):
         -> (hits, world origins (n, 3), world directions (n, 3)). ``bundle`` (the same rays binned
-        once by the sensor, with its mount) and ``buffers`` (the sensor's arrays of n rays, which
+        once by the sensor, with its mount; or, from ``RayBundle.for_moved``, the sensor's nominal rays
+        when ``origins, directions`` are them moved by its own motion: then the robot, which moves with
+        it, may be cast along the nominal ones) and ``buffers`` (the sensor's arrays of n rays, which
         the results may be written into) are hints a back end may ignore. ``exact``: terrain hits
         on faces that approximate a curved analytic surface refined onto it (False: the mesh's
         hits); ``refine_beyond`` m: such a hit nearer than this whose ray is inside the terrain
-        there may be left unrefined (it only blocks)."""
+        there may be left unrefined (it only blocks). A sensor passes ``texture_contrast=c`` (the
+        terrain materials' texture contrasts times c) only when c is not 1: a back end may omit it."""
 
 
 @dataclasses.dataclass(frozen=True, eq=False)

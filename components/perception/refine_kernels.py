@@ -1,4 +1,5 @@
-"""Compiled hit refinement for the Fourier-cylinder terrains (tube, rough tube, moulin): the
+"""Compiled hit refinement: height fields (DEM, ``DemRefiner``: the exact crossing of the bilinear
+surface, in the section at the end) and the Fourier-cylinder terrains (tube, rough tube, moulin): the
 Newton iteration of .ray_caster (f(t) = d(o + t·r), t ← t − f/f', f' = n·r, until the error
 left is below the tolerance, a grazing or too long step keeps the mesh hit) with the terrain's distance written out per
 point instead of NumPy passes over (rays × modes) arrays. The distance is the terrain's
@@ -321,3 +322,292 @@ def newton(wall, o, d, rays, iterations, tolerance, grazing, limit, near, albedo
         albedo[i] = albedo_m[mat]
         for c in range(3):
             color[i, c] = color_m[mat, c]
+
+
+# --- height fields (DEM) -----------------------------------------------------------------------------
+#
+# A DEM's sensor mesh is its grid cut into two triangles a cell; the contact touches the bilinear
+# surface (components/terrain/dem.py, ``HeightField.height``). In the cell (i, j), with u, v in [0, 1]
+# the position in the cell (x = x0 + (j + u)·res, y = y0 + (i + v)·res),
+#
+#     h = a + b·u + c·v + e·u·v,   a = z00, b = z01 − z00, c = z10 − z00, e = z00 − z01 − z10 + z11
+#
+# (z00 = z[i, j], z01 = z[i, j + 1], z10 = z[i + 1, j], z11 = z[i + 1, j + 1]), so it departs from
+# either triangle by e·v·(1 − u) (or e·u·(1 − v)): up to |e|/4 above or below the mesh, inside a
+# cell. Along a ray (u, v and z linear in t) f(t) = z_ray − h is a quadratic in t, solved exactly
+# per cell. The bilinear surface may rise above the mesh in a cell the ray passes over before its
+# mesh hit (a grazing ray skimming a ridge), so the first crossing is searched from the ray's
+# origin, not near the mesh hit: a 2-D DDA over the cells the ray crosses (Amanatides & Woo), a
+# cell skipped without solving when the ray is above its highest corner all through it (a bilinear
+# patch lies within its corners' range), and the same first over blocks of BLOCK x BLOCK cells; the
+# walk starts where the ray is inside the grid and below its highest sample, and ends ``limit`` past
+# the mesh hit (beyond it the mesh hit is kept, as the Newton refiners keep theirs). The grid's flat
+# extension past its edges (``HeightField.height``) has no mesh and is not searched.
+# tests/perception/test_dem_hits.py checks the hits against the contact's height query.
+
+#: one height field, as ``dem_hits`` reads it: z (ny, nx) m, its cells' highest corners (ny − 1, nx − 1),
+#: the grid's highest sample, origin and spacing (m), and the surface's material index
+DemGrid = record("DemGrid", ("z", "cell_max", "block_max", "top", "x0", "y0", "res", "material"))
+
+#: cells a side of the walk's blocks (a block's highest corner lets a ray high above it skip its
+#: cells at once)
+BLOCK = 8
+#: cells past the grid's edges the walk still takes as on it (the patch's extension there is off
+#: the flat extension by |slope|·EDGE·res at most: 1e-10 m at 5 cm cells and slope 2); a direction
+#: crossing fewer cells than this over the walk is held along the grid's lines
+EDGE = 1e-9
+
+#: dem_hits' codes for a ray that meets no surface in its walk, or starts below it
+NO_CROSSING, STARTS_INSIDE = -1.0, -2.0
+
+
+class DemRefiner:
+    """The exact hits of a height field's bilinear surface: what ``HeightField.refiner`` returns.
+    ``refine`` has FourierRefiner's arguments (the Newton ones are not used: the root is solved, not
+    iterated)."""
+
+    def __init__(self, dem):
+        z = np.ascontiguousarray(dem.z, dtype=np.float64)
+        corners = np.maximum(np.maximum(z[:-1, :-1], z[:-1, 1:]), np.maximum(z[1:, :-1], z[1:, 1:]))
+        self.z, self.cell_max = z, np.ascontiguousarray(corners)
+        # blocks of BLOCK x BLOCK cells (the last ones partial): their cells' highest corner
+        pad = -(-np.array(corners.shape) // BLOCK) * BLOCK - corners.shape
+        padded = np.pad(corners, ((0, pad[0]), (0, pad[1])), constant_values=-np.inf)
+        blocks = padded.reshape(padded.shape[0] // BLOCK, BLOCK, padded.shape[1] // BLOCK, BLOCK).max(axis=(1, 3))
+        self.block_max = np.ascontiguousarray(blocks)
+        self.grid = DemGrid(z=self.z, cell_max=self.cell_max, block_max=self.block_max, top=float(z.max()),
+                            x0=float(dem.x0), y0=float(dem.y0), res=float(dem.res),
+                            material=int(dem.region_material[0]))
+
+    def refine(self, o, d, rays, iterations: int, tolerance: float, grazing: float, limit: float, albedo_m, color_m,
+               distance, normal, albedo, color, material, near: float = 0.0):
+        """The first crossing of the bilinear surface of rays ``rays`` of (o, d (n, 3)), searched up to
+        ``limit`` m past their mesh hits (``distance``); in place where one is found (``dem_hits``)."""
+        dem_hits(self.grid, o, d, rays, float(limit), float(near), albedo_m, color_m, distance, normal, albedo,
+                 color, material)
+
+    def first_crossing(self, o, d, t_end) -> np.ndarray:
+        """(n,) the first t in [0, t_end] (m, per ray) where rays o + t·d (n, 3) meet the surface inside
+        the grid; NO_CROSSING where none, STARTS_INSIDE where a ray starts below it (``_crossing``)."""
+        o = np.ascontiguousarray(o, dtype=np.float64).reshape(-1, 3)
+        d = np.ascontiguousarray(d, dtype=np.float64).reshape(-1, 3)
+        t = np.broadcast_to(np.asarray(t_end, dtype=np.float64), (len(o),)).copy()
+        crossings(self.grid, o, d, t)
+        return t
+
+
+@njit(cache=True, nogil=True)
+def _bilinear_below(z, x0, y0, res, x, y, zp):
+    """Whether the point (x, y, zp) is below the bilinear surface (flat past the grid's edges, as
+    ``HeightField.height``)."""
+    ny, nx = z.shape
+    fx = min(max((x - x0) / res, 0.0), nx - 1.0)
+    fy = min(max((y - y0) / res, 0.0), ny - 1.0)
+    j = min(int(fx), nx - 2)
+    i = min(int(fy), ny - 2)
+    u, v = fx - j, fy - i
+    h = (1 - v) * ((1 - u) * z[i, j] + u * z[i, j + 1]) + v * ((1 - u) * z[i + 1, j] + u * z[i + 1, j + 1])
+    return zp < h
+
+
+@njit(cache=True, nogil=True)
+def _cell_root(z, i, j, ua, va, za, gdx, gdy, dz, length, first):
+    """The smallest s in [0, length] where za + s·dz meets the cell (i, j)'s bilinear patch along
+    u = ua + s·gdx, v = va + s·gdy (s from the ray's entry into the cell); -1 where none, −2 where
+    the ray enters the first cell walked below the surface."""
+    a = z[i, j]
+    b = z[i, j + 1] - a
+    c = z[i + 1, j] - a
+    e = a - z[i, j + 1] - z[i + 1, j] + z[i + 1, j + 1]
+    # f(s) = z_ray − h = A s² + B s + C
+    A = -e * gdx * gdy
+    B = dz - b * gdx - c * gdy - e * (ua * gdy + va * gdx)
+    C = za - (a + b * ua + c * va + e * ua * va)
+    if C <= 0.0:
+        # at the entry already at or below: the root is the entry (a crossing on the cell's border
+        # rounded into this cell), unless this is where the walk starts (the ray starts inside)
+        return -2.0 if first and C < 0.0 else 0.0
+    best = -1.0
+    if A == 0.0:
+        if B < 0.0:
+            best = -C / B
+    else:
+        disc = B * B - 4.0 * A * C
+        if disc >= 0.0:
+            # the stable pair: q = −(B + sign(B)√disc)/2, roots q/A and C/q
+            q = -0.5 * (B + math.copysign(math.sqrt(disc), B))
+            r1 = q / A
+            r2 = C / q if q != 0.0 else r1
+            lo, hi = min(r1, r2), max(r1, r2)
+            best = lo if lo >= 0.0 else hi
+    return best if 0.0 <= best <= length else -1.0
+
+
+@njit(cache=True, nogil=True)
+def _cells(z, cell_max, gx0, gy0, gdx, gdy, oz, dz, lo, hi, first, hit):
+    """The cell walk over t in [lo, hi] (the ray inside the grid there): the first root of
+    ``_cell_root`` in the cells the ray crosses, from the one it is in at lo; -> t (hit: row, column,
+    u), NO_CROSSING or STARTS_INSIDE (``first``: lo is the start of the whole walk)."""
+    ny, nx = z.shape
+    gx, gy = gx0 + lo * gdx, gy0 + lo * gdy
+    j, i = int(math.floor(gx)), int(math.floor(gy))
+    if gdx < 0.0 and j == gx:          # on a cell border going down: the cell below it
+        j -= 1
+    if gdy < 0.0 and i == gy:
+        i -= 1
+    j, i = min(max(j, 0), nx - 2), min(max(i, 0), ny - 2)
+    sx = 1 if gdx > 0.0 else -1
+    sy = 1 if gdy > 0.0 else -1
+    # the cell's far borders: column j + bx, row i + by, reached at t = (border − g0)·inverse
+    bx, by = (1 if gdx > 0.0 else 0) - gx0, (1 if gdy > 0.0 else 0) - gy0
+    ix = 1.0 / gdx if gdx != 0.0 else 0.0
+    iy = 1.0 / gdy if gdy != 0.0 else 0.0
+    ta = lo
+    for _ in range(nx + ny + 2):
+        tx = (j + bx) * ix if gdx != 0.0 else math.inf
+        ty = (i + by) * iy if gdy != 0.0 else math.inf
+        tb = max(min(tx, ty, hi), ta)
+        # the ray's lowest point in the cell above its highest corner: no crossing here
+        if min(oz + ta * dz, oz + tb * dz) <= cell_max[i, j]:
+            ua, va = gx0 + ta * gdx - j, gy0 + ta * gdy - i
+            s = _cell_root(z, i, j, ua, va, oz + ta * dz, gdx, gdy, dz, tb - ta, first)
+            if s == -2.0:
+                return STARTS_INSIDE
+            if s >= 0.0:
+                hit[0], hit[1] = i, j
+                hit[2] = ua + s * gdx
+                return ta + s
+        first = False
+        if tb >= hi:
+            break
+        if tx <= ty:
+            j += sx
+        else:
+            i += sy
+        if j < 0 or j > nx - 2 or i < 0 or i > ny - 2:
+            break
+        ta = tb
+    return NO_CROSSING
+
+
+@njit(cache=True, nogil=True)
+def _crossing(z, cell_max, block_max, top, x0, y0, res, ox, oy, oz, dx, dy, dz, t_end, hit):
+    """The first t in [0, t_end] where o + t·d meets the bilinear surface inside the grid, and in
+    hit (3,) the cell row, column and the crossing's u; -> t, NO_CROSSING or STARTS_INSIDE. The walk
+    (module section above) goes over blocks of BLOCK x BLOCK cells first, a block skipped when the
+    ray is above its highest corner all through it, the cells of the others walked (``_cells``)."""
+    ny, nx = z.shape
+    gx0, gy0 = (ox - x0) / res, (oy - y0) / res
+    gdx, gdy = dx / res, dy / res
+    lo, hi = 0.0, t_end
+    # the part of the ray over the grid (widened by EDGE: a ray along an edge, its direction
+    # rounded off it, stays on it) ...
+    if gdx != 0.0:
+        ta, tb = (-EDGE - gx0) / gdx, (nx - 1 + EDGE - gx0) / gdx
+        lo, hi = max(lo, min(ta, tb)), min(hi, max(ta, tb))
+    elif gx0 < -EDGE or gx0 > nx - 1 + EDGE:
+        return NO_CROSSING
+    if gdy != 0.0:
+        ta, tb = (-EDGE - gy0) / gdy, (ny - 1 + EDGE - gy0) / gdy
+        lo, hi = max(lo, min(ta, tb)), min(hi, max(ta, tb))
+    elif gy0 < -EDGE or gy0 > ny - 1 + EDGE:
+        return NO_CROSSING
+    # ... and below its highest sample (nothing above it can be met)
+    if dz < 0.0:
+        lo = max(lo, (top - oz) / dz)
+    elif dz > 0.0:
+        hi = min(hi, (top - oz) / dz)
+    elif oz > top:
+        return NO_CROSSING
+    if not lo <= hi:
+        return NO_CROSSING
+    # a direction that crosses less than EDGE cells over the walk is along the grid's lines (its
+    # component is the rounding of a direction on them): held to them, not stepped off an edge
+    if abs(gdx) * (hi - lo) < EDGE:
+        gdx = 0.0
+    if abs(gdy) * (hi - lo) < EDGE:
+        gdy = 0.0
+    # the block walk: the cells' walk in block units
+    nby, nbx = block_max.shape
+    bx0, by0, bdx, bdy = gx0 / BLOCK, gy0 / BLOCK, gdx / BLOCK, gdy / BLOCK
+    gx, gy = bx0 + lo * bdx, by0 + lo * bdy
+    j, i = int(math.floor(gx)), int(math.floor(gy))
+    if bdx < 0.0 and j == gx:
+        j -= 1
+    if bdy < 0.0 and i == gy:
+        i -= 1
+    j, i = min(max(j, 0), nbx - 1), min(max(i, 0), nby - 1)
+    sx = 1 if bdx > 0.0 else -1
+    sy = 1 if bdy > 0.0 else -1
+    bx, by = (1 if bdx > 0.0 else 0) - bx0, (1 if bdy > 0.0 else 0) - by0
+    ix = 1.0 / bdx if bdx != 0.0 else 0.0
+    iy = 1.0 / bdy if bdy != 0.0 else 0.0
+    ta = lo
+    for _ in range(nbx + nby + 2):
+        tx = (j + bx) * ix if bdx != 0.0 else math.inf
+        ty = (i + by) * iy if bdy != 0.0 else math.inf
+        tb = max(min(tx, ty, hi), ta)
+        if min(oz + ta * dz, oz + tb * dz) <= block_max[i, j]:
+            t = _cells(z, cell_max, gx0, gy0, gdx, gdy, oz, dz, ta, tb, ta == lo, hit)
+            if t != NO_CROSSING:
+                return t
+        if tb >= hi:
+            break
+        if tx <= ty:
+            j += sx
+        else:
+            i += sy
+        if j < 0 or j >= nbx or i < 0 or i >= nby:
+            break
+        ta = tb
+    return NO_CROSSING
+
+
+@njit(cache=True, nogil=True)
+def crossings(grid, o, d, t):
+    """t[k] (in: the walk's end, m) <- the first crossing of ray k (``_crossing``)."""
+    z, cell_max, block_max, top = grid.z, grid.cell_max, grid.block_max, grid.top
+    x0, y0, res = grid.x0, grid.y0, grid.res
+    hit = np.empty(3)
+    for k in range(o.shape[0]):
+        t[k] = _crossing(z, cell_max, block_max, top, x0, y0, res, o[k, 0], o[k, 1], o[k, 2], d[k, 0], d[k, 1], d[k, 2],
+                         t[k], hit)
+
+
+@njit(cache=True, nogil=True)
+def dem_hits(grid, o, d, rays, limit, near, albedo_m, color_m, distance, normal, albedo, color, material):
+    """For the rays ``rays`` of (o, d) with mesh hits ``distance``: the first crossing of the bilinear
+    surface (``_crossing``, walked from the origin to ``limit`` m past the mesh hit) replaces the
+    mesh hit's distance, normal (the surface's, facing the ray), material, albedo and colour in
+    place. Kept as they are: a ray with no crossing there (the mesh hit off the grid's surface by
+    more than ``limit``), one that starts below the surface, and a mesh hit nearer than ``near`` m
+    whose ray is below the surface at ``near`` (it only blocks: a lidar's minimum range)."""
+    z, cell_max, block_max, top = grid.z, grid.cell_max, grid.block_max, grid.top
+    x0, y0, res, mat = grid.x0, grid.y0, grid.res, grid.material
+    hit = np.empty(3)
+    for q in range(rays.shape[0]):
+        k = rays[q]
+        t0 = distance[k]
+        ox, oy, oz, dx, dy, dz = o[k, 0], o[k, 1], o[k, 2], d[k, 0], d[k, 1], d[k, 2]
+        if t0 < near and _bilinear_below(z, x0, y0, res, ox + near * dx, oy + near * dy, oz + near * dz):
+            continue
+        t = _crossing(z, cell_max, block_max, top, x0, y0, res, ox, oy, oz, dx, dy, dz, t0 + limit, hit)
+        if t < 0.0:
+            continue
+        i, j, u = int(hit[0]), int(hit[1]), hit[2]
+        v = (oy + t * dy - y0) / res - i
+        u, v = min(max(u, 0.0), 1.0), min(max(v, 0.0), 1.0)
+        a = z[i, j]
+        e = a - z[i, j + 1] - z[i + 1, j] + z[i + 1, j + 1]
+        hx = (z[i, j + 1] - a + e * v) / res
+        hy = (z[i + 1, j] - a + e * u) / res
+        s = 1.0 / math.sqrt(1.0 + hx * hx + hy * hy)
+        nx_, ny_, nz_ = -hx * s, -hy * s, s
+        if nx_ * dx + ny_ * dy + nz_ * dz > 0.0:
+            nx_, ny_, nz_ = -nx_, -ny_, -nz_
+        distance[k] = t
+        normal[k, 0], normal[k, 1], normal[k, 2] = nx_, ny_, nz_
+        material[k] = mat
+        albedo[k] = albedo_m[mat]
+        for c in range(3):
+            color[k, c] = color_m[mat, c]

@@ -75,6 +75,9 @@ def terrain_surfaces(terrain: Terrain, center=(0.0, 0.0, 0.0), extent: float = 3
     m = at_centroid.material
     # a flat face lies on the surface to float32 rounding of its vertices (≈1e-7 relative)
     off = np.abs(at_centroid.distance) > SAG_TOL * np.maximum(1.0, np.abs(V[F[:, 0]]).max(axis=1))
+    # a kind whose surface can rise above its mesh where a ray passes over it (a DEM's bilinear cells)
+    # refines the hits on every face: the first crossing may lie before a flat face's hit
+    off |= bool(terrain.refine_every_face)
     return TerrainSurfaces(terrain, V, F, m, albedo[m], color[m], refine=off & (refine and is_exact(terrain)))
 
 
@@ -90,9 +93,10 @@ def optical_table(materials) -> tuple[np.ndarray, np.ndarray]:
 
 def is_exact(terrain: Terrain) -> bool:
     """Whether the terrain's zero level set is its true surface and its display mesh only a
-    tessellation of it (the kind's ``refine_hits``: refine mesh hits onto the surface). A height
-    field's mesh is its own grid and a mesh terrain's mesh is the imported file (its distance grid
-    is the approximation): casting against the mesh is exact for those."""
+    tessellation of it (the kind's ``refine_hits``: refine mesh hits onto the surface). A mesh
+    terrain's mesh is the imported file (its distance grid is the approximation): casting against
+    the mesh is exact for it. A height field's mesh is its grid in triangles, its surface the grid's
+    bilinear interpolation: its hits are refined (refine_kernels.DemRefiner)."""
     return bool(terrain.refine_hits)
 
 

@@ -10,6 +10,7 @@ sensor port 'comp.port' with base B = /comp (the component's only such port) or 
     B/points         sensor_msgs/PointCloud2   a LidarScan (.sensor_messages: organised, NaN misses)
     B/image_raw      sensor_msgs/Image         a CameraFrame's image, mono8 or rgb8 (saturated at 1)
     B/depth          sensor_msgs/Image         its depth, 32FC1 m, NaN where nothing is hit
+    B/labels         sensor_msgs/Image         its labels, mono16: what each pixel's ray hit (perception/labels.py)
     B/camera_info    sensor_msgs/CameraInfo    its model (pinhole, fisheye, CAHV; none for CAHVOR/E); a
                                                stereo right camera's P[3] = -fx·baseline, R = I
     /tf_static       tf2_msgs/TFMessage        once, transient local: each sensor frame that is not a robot
@@ -104,7 +105,7 @@ class Ros2SensorBridge(ClosedAfterRun, Component[Ros2SensorBridgeParams]):
     def before_run(self, t0, u):
         """The DDS participant, /tf_static and every configured sensor topic's writer, opened before the clock
         starts (so they are in the ``--ros2`` start print and the node's announcement from the start). A
-        sensor's kind (lidar: B/points; camera: B/image_raw, B/depth, B/camera_info) is its sample's type when
+        sensor's kind (lidar: B/points; camera: B/image_raw, B/depth, B/labels, B/camera_info) is its sample's type when
         one is already on the input, else its port's name (a lidar's ``scan``; a camera's ``frame``, a stereo
         pair's ``left``/``right``), else an optical mount; a sensor none of these tells gets its writers at
         its first sample, as before."""
@@ -115,7 +116,8 @@ class Ros2SensorBridge(ClosedAfterRun, Component[Ros2SensorBridgeParams]):
             run.now = t0
             self._open(run)
         topics = {"lidar": (("points", SM.POINT_CLOUD2),),
-                  "camera": (("image_raw", SM.IMAGE), ("depth", SM.IMAGE), ("camera_info", SM.CAMERA_INFO))}
+                  "camera": (("image_raw", SM.IMAGE), ("depth", SM.IMAGE), ("labels", SM.IMAGE),
+                             ("camera_info", SM.CAMERA_INFO))}
         for i, (ref, base) in enumerate(zip(self.p.sensors, self.bases)):
             kind = self._sensor_kind(ref, getattr(u, sensor_input_name(i), None))
             for suffix, ros_name in topics.get(kind, ()):
@@ -172,6 +174,7 @@ class Ros2SensorBridge(ClosedAfterRun, Component[Ros2SensorBridgeParams]):
         elif isinstance(sample, CameraFrame):
             self._writer(run, f"{base}/image_raw", SM.IMAGE).write(SM.image(ts, sample, frame_id))
             self._writer(run, f"{base}/depth", SM.IMAGE).write(SM.depth_image(ts, sample, frame_id))
+            self._writer(run, f"{base}/labels", SM.IMAGE).write(SM.label_image(ts, sample, frame_id))
             info = SM.camera_info(ts, sample, frame_id, sf.baseline if sf is not None else 0.0)
             if info is not None:
                 self._writer(run, f"{base}/camera_info", SM.CAMERA_INFO).write(info)

@@ -2,8 +2,8 @@
 
 ``ros2_sensor_mcap`` is the sensor bridge (:class:`.sensor_bridge.Ros2SensorBridge`) with a file
 instead of DDS, as ``ros2_mcap`` is the publisher with a file: the same ``sensors``/``bases``
-params and inputs, the same messages byte for byte (``B/points`` PointCloud2, ``B/image_raw`` and
-``B/depth`` Image, ``B/camera_info`` CameraInfo, the sensor frames on ``/tf``), each logged at its
+params and inputs, the same messages byte for byte (``B/points`` PointCloud2, ``B/image_raw``,
+``B/depth`` and ``B/labels`` Image, ``B/camera_info`` CameraInfo, the sensor frames on ``/tf``), each logged at its
 sample's own simulated time (ns). It writes into the same file as the run's ``ros2_mcap``
 recorder when both name one path (:class:`.mcap_recorder.McapFile` is shared per path), so one
 bag holds the robot's topics and what its sensors measured, as ``ros2 bag record`` would. Its

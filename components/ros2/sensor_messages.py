@@ -1,19 +1,24 @@
 """Perception samples as ROS 2 messages: LidarScan -> sensor_msgs/PointCloud2, CameraFrame ->
-sensor_msgs/Image (image and depth) and sensor_msgs/CameraInfo, serialised by rosbags' CDR codec
+sensor_msgs/Image (image, depth and labels) and sensor_msgs/CameraInfo, serialised by rosbags' CDR codec
 (the maintained standard definitions; numpy arrays go through as one copy).
 
 PointCloud2 (REP 117/118 conventions): every beam keeps its slot (an organised cloud of
 height = channels, width = columns for a grid, else height 1); a beam without a return has
-NaN x, y, z, so ``is_dense`` is false. Fields, little-endian, point_step 20:
+NaN x, y, z, so ``is_dense`` is false. Fields, little-endian, point_step 28:
 
-    x, y, z     float32   m, lidar frame          offsets 0, 4, 8
+    x, y, z     float32   m, lidar frame at the beam's firing instant    offsets 0, 4, 8
     intensity   float32   diffuse return          offset 12
     ring        uint16    channel index           offset 16
-    status      uint8     0 return, 1 no return, 2 too close, 3 dropout (lidar.py)   offset 18
+    status      uint8     0 return, 1 no return, 2 too close, 3 dropout, 4 weak (lidar.py)   offset 18
+    t           float32   s, when the beam fired, relative to the header stamp (<= 0; 0 without
+                          motion distortion), as Ouster's and Velodyne's drivers' per-point time   offset 20
+    label       uint16    what the beam hit (perception/labels.py: 0 nothing, 1 + material terrain,
+                          1000 + link row robot, 2000 + i obstacle)   offset 24
 
 Image: ``mono8`` (grey) or ``rgb8`` (colour), the camera's linear values saturated to [0, 1]
 and scaled to 0..255 (what an 8-bit sensor with that exposure reports); depth ``32FC1`` in m
-along the optical axis, NaN where nothing is hit (REP 118). CameraInfo: the model's
+along the optical axis, NaN where nothing is hit (REP 118); labels ``mono16``, each pixel what its
+ray hit (the label scheme above, 0 where nothing is). CameraInfo: the model's
 ``camera_info()`` (pinhole: plumb_bob, fisheye: equidistant, CAHV as a pinhole); models with
 no ROS equivalent (CAHVOR, CAHVORE) publish no CameraInfo. A stereo pair follows ROS's
 convention (sensor_msgs/CameraInfo): the images are rectified already (parallel axes, one
@@ -28,14 +33,14 @@ from __future__ import annotations
 
 import numpy as np
 
-POINT_STEP = 20
+POINT_STEP = 28
 #: PointField datatypes (sensor_msgs/PointField constants)
 UINT8, UINT16, FLOAT32 = 2, 4, 7
 _CLOUD_FIELDS = (("x", 0, FLOAT32), ("y", 4, FLOAT32), ("z", 8, FLOAT32), ("intensity", 12, FLOAT32),
-                 ("ring", 16, UINT16), ("status", 18, UINT8))
-_CLOUD_DTYPE = np.dtype({"names": ["x", "y", "z", "intensity", "ring", "status"],
-                         "formats": ["<f4", "<f4", "<f4", "<f4", "<u2", "u1"],
-                         "offsets": [0, 4, 8, 12, 16, 18], "itemsize": POINT_STEP})
+                 ("ring", 16, UINT16), ("status", 18, UINT8), ("t", 20, FLOAT32), ("label", 24, UINT16))
+_CLOUD_DTYPE = np.dtype({"names": ["x", "y", "z", "intensity", "ring", "status", "t", "label"],
+                         "formats": ["<f4", "<f4", "<f4", "<f4", "<u2", "u1", "<f4", "<u2"],
+                         "offsets": [0, 4, 8, 12, 16, 18, 20, 24], "itemsize": POINT_STEP})
 
 POINT_CLOUD2, IMAGE, CAMERA_INFO = "sensor_msgs/msg/PointCloud2", "sensor_msgs/msg/Image", "sensor_msgs/msg/CameraInfo"
 
@@ -50,9 +55,13 @@ def point_cloud2(ts, scan, frame_id: str | None = None) -> bytes:
     """CDR bytes of a PointCloud2 of ``scan`` (a LidarScan), in ``frame_id`` (default ``scan.frame``)."""
     n = len(scan.range)
     rows, cols = scan.shape if scan.shape is not None else (1, n)
-    pts = np.empty(n, dtype=_CLOUD_DTYPE)
+    pts = np.zeros(n, dtype=_CLOUD_DTYPE)          # zeros: the padding bytes too (a bag's bytes are reproducible)
     pts["x"], pts["y"], pts["z"] = scan.points[:, 0], scan.points[:, 1], scan.points[:, 2]
     pts["intensity"], pts["ring"], pts["status"] = scan.intensity, scan.ring, scan.status
+    if scan.time is not None:
+        pts["t"] = scan.time
+    if scan.label is not None:
+        pts["label"] = scan.label
     PointField = ts.types["sensor_msgs/msg/PointField"]
     msg = ts.types[POINT_CLOUD2](
         header=_header(ts, scan.t, frame_id or scan.frame), height=rows, width=cols,
@@ -80,6 +89,16 @@ def depth_image(ts, frame, frame_id: str | None = None) -> bytes:
     data = np.ascontiguousarray(frame.depth, dtype="<f4")
     msg = ts.types[IMAGE](header=_header(ts, frame.t, frame_id or frame.frame), height=h, width=w, encoding="32FC1",
                           is_bigendian=0, step=4 * w, data=data.view(np.uint8).reshape(-1))
+    return bytes(ts.serialize_cdr(msg, IMAGE))
+
+
+def label_image(ts, frame, frame_id: str | None = None) -> bytes:
+    """CDR bytes of the mono16 label Image of ``frame`` (perception/labels.py; all 0 for a frame without labels)."""
+    h, w = frame.depth.shape
+    label = frame.label if frame.label is not None else np.zeros((h, w), np.uint16)
+    data = np.ascontiguousarray(label, dtype="<u2")
+    msg = ts.types[IMAGE](header=_header(ts, frame.t, frame_id or frame.frame), height=h, width=w, encoding="mono16",
+                          is_bigendian=0, step=2 * w, data=data.view(np.uint8).reshape(-1))
     return bytes(ts.serialize_cdr(msg, IMAGE))
 
 

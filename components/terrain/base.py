@@ -19,14 +19,19 @@ so a new kind implements :meth:`Terrain._query` and only overrides what it does 
     sensor_cell(extent, cell)                     the tessellation the sensors ask for (flat kinds:
         a few large quads). Default: ``cell``
     refine_hits                                   whether a ray's mesh hit on a face that is off the
-        surface is refined onto the zero level set (False where the mesh *is* the surface: a DEM's
-        grid, an imported mesh). Default True: Newton on :meth:`query` along the ray
+        surface is refined onto the zero level set (False where the mesh *is* the surface: an
+        imported mesh). Default True: Newton on :meth:`query` along the ray
+    refine_every_face                             refine on every face, not only those off the surface
+        (a DEM: its bilinear cells leave their triangles). Default False
     refiner(vertices, margin)                     a compiled refinement (tube, moulin: numba), or None
         for the generic Newton iteration. Default None
     contact_parts(extent, segments, resolution)   the hull back end's geometry: HalfSpace and
         Triangles records. Default: the triangles of display_mesh around the origin
     fast_plane()                                  (origin, normal) where the SDF contact may query the
         terrain as one plane in numba. Default None
+    parts(points), part_count                     which separate object (an obstacle) each surface point
+        belongs to, -1 for the kind's continuous surface: sensors label part i as its own object
+        (perception/labels.py). Default None, 0: no parts
 
 Static geometry and state
 -------------------------
@@ -192,6 +197,9 @@ class Terrain:
     regions: tuple[str, ...] = ("surface",)
     #: refine a ray's hits on mesh faces off the surface onto the zero level set (module docstring)
     refine_hits: bool = True
+    #: refine hits on every face, not only on faces whose centre is off the surface: a height field's
+    #: bilinear patches leave their two triangles everywhere but at the grid's vertices (terrain/dem.py)
+    refine_every_face: bool = False
 
     def __init__(self, materials=(Material(),), region_material=None, name: str = "", state=None):
         self.materials: tuple[Material, ...] = tuple(materials)
@@ -271,6 +279,14 @@ class Terrain:
         NotImplementedError: the kind has none (the hull back end says so)."""
         m = self.display_mesh(np.zeros(3), extent, resolution, None)
         return [Triangles(np.asarray(m.vertices, dtype=np.float64), np.asarray(m.faces, dtype=np.int64))]
+
+    #: how many parts :meth:`parts` tells apart (0: none)
+    part_count: int = 0
+
+    def parts(self, points) -> np.ndarray | None:
+        """(n,) int64: the part (0 … part_count − 1) each surface point (n, 3) m, world, belongs to, −1 on
+        the kind's continuous surface; None for a kind without parts (the default)."""
+        return None
 
     def fast_plane(self):
         """(origin, unit normal) when the whole terrain is that one plane and its query may be replaced

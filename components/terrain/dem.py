@@ -73,8 +73,17 @@ class HeightField(Terrain):
         hy = np.where(iny, ((1 - tx) * (z10 - z00) + tx * (z11 - z01)) / self.res, 0.0)
         return h, hx, hy
 
-    #: the mesh is the grid itself: ray hits on it are exact
-    refine_hits = False
+    #: the sensors' mesh is the grid cut into triangles, up to |z00 − z01 − z10 + z11|/4 off the bilinear
+    #: surface the contact touches, inside a cell: every hit is refined onto it, on any face (the surface
+    #: may rise above the mesh in a cell a ray passes over before its mesh hit): ``refiner``
+    refine_hits = True
+    refine_every_face = True
+
+    def refiner(self, vertices=None, margin=1.0):
+        """The exact ray hits of the bilinear surface (perception/refine_kernels.py: DemRefiner)."""
+        from snakesim.components.perception.refine_kernels import DemRefiner
+
+        return DemRefiner(self)
 
     def display_mesh(self, center, extent, cell, cutaway):
         from .display import _dem

@@ -163,6 +163,31 @@ class ObstacleField(Terrain):
     def contact_parts(self, extent=10.0, segments=64, resolution=0.05):
         raise NotImplementedError("blocks and rocks on a ground plane have no coal representation yet")
 
+    @property
+    def part_count(self) -> int:
+        return len(self.blocks) + len(self.rocks)
+
+    def parts(self, points):
+        """Blocks in their order, then rocks (block b: part b, rock k: part nb + k); −1 on the ground plane
+        (within 1e-6 m, relative beyond 1 m of height), else the obstacle whose surface is nearest."""
+        p = np.asarray(points, dtype=float).reshape(-1, 3)
+        part = np.full(len(p), -1, dtype=np.int64)
+        h = self.ground_height
+        above = np.abs(p[:, 2] - h) > 1e-6 * max(1.0, abs(h))
+        if self.part_count and above.any():
+            part[above] = np.argmin(np.abs(self._obstacle_distances(p[above])), axis=1)
+        return part
+
+    def _obstacle_distances(self, p: np.ndarray) -> np.ndarray:
+        """(n, nb + nr) signed distance (m) of points p (n, 3) to each block (plain box) and rock (sphere)."""
+        cols = []
+        for b in self.blocks:
+            q = np.abs((p - np.asarray(b.center)) @ b.rotation) - 0.5 * np.asarray(b.size)
+            cols.append(np.linalg.norm(np.maximum(q, 0.0), axis=1) + np.minimum(q.max(axis=1), 0.0))
+        for r in self.rocks:
+            cols.append(np.linalg.norm(p - np.asarray(r.center), axis=1) - r.radius)
+        return np.stack(cols, axis=1)
+
     def _query(self, p):
         n = len(p)
         d, normal, region = np.empty(n), np.empty((n, 3)), np.empty(n, dtype=np.int64)

@@ -35,7 +35,7 @@ def test_a_stereo_size_that_cannot_fit_is_refused_with_the_estimate_and_what_fit
     r = invoke("run", "--stereo", "100000x100000", "--duration", "0.01", "--quiet")
     assert r.exit_code != 0 and "ArrayMemoryError" not in r.output and "Traceback" not in r.output, r.output
     out = " ".join(r.output.split())
-    assert "--stereo: 100000x100000 pixels would take ~3.46 TB" in out, out
+    assert "--stereo: 100000x100000 pixels would take ~3.52 TB" in out, out       # 1e10 px x (322 + 2 x 15) B
     assert "B a pixel" in out and "memory limit" in out and "pixels fit, e.g." in out
 
 

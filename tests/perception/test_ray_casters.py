@@ -149,7 +149,7 @@ def test_embree_is_the_built_in_back_end_and_the_default():
 
 def test_an_unknown_back_end_is_an_error_naming_the_valid_ones(installed, tmp_path):
     with pytest.raises(ValueError, match="ray_caster = 'optix' is not a registered ray-casting back end; "
-                                         "valid: embree, test_counting, test_brute"):
+                                         "valid: embree, raster, test_counting, test_brute"):
         Harness(SensorScene, {"ray_caster": "optix"}, uses=USES)
     scene = tmp_path / "scene.yaml"
     scene.write_text("sim: {duration: 0.01, dt: 0.001}\ncomponents:\n"
@@ -159,7 +159,8 @@ def test_an_unknown_back_end_is_an_error_naming_the_valid_ones(installed, tmp_pa
     from snakesim.framework.session import Session
 
     reg = build_registry(load_entry_points=False)
-    with pytest.raises(ConfigError, match=r"scene\.yaml:3.*ray_caster.*valid: embree, test_counting, test_brute"):
+    with pytest.raises(ConfigError,
+                       match=r"scene\.yaml:3.*ray_caster.*valid: embree, raster, test_counting, test_brute"):
         Session(resolve(str(scene), search_path=reg.assembly_paths()), reg)
 
 

@@ -26,7 +26,7 @@ ROBOT = {"/clock": "rosgraph_msgs/msg/Clock", "/joint_states": "sensor_msgs/msg/
 LIDAR = {"/lidar/points": "sensor_msgs/msg/PointCloud2"}
 STEREO = {f"/stereo/{side}/{what}": typ for side in ("left", "right")
           for what, typ in (("image_raw", "sensor_msgs/msg/Image"), ("depth", "sensor_msgs/msg/Image"),
-                            ("camera_info", "sensor_msgs/msg/CameraInfo"))}
+                            ("labels", "sensor_msgs/msg/Image"), ("camera_info", "sensor_msgs/msg/CameraInfo"))}
 #: topic -> (reliable, depth, transient local) as offered on the wire
 WIRE_QOS = {"/clock": (False, 1, False), "/tf": (True, 100, False), "/tf_static": (True, 1, True),
             "/robot_description": (True, 1, True), "/joint_states": (True, 10, False),

@@ -39,6 +39,7 @@ def test_sensor_topics_share_the_bag_with_the_robot_topics(dds_domain, tmp_path)
     want = {"/lidar/points": ("sensor_msgs/msg/PointCloud2", lidar_rate),
             "/stereo/left/image_raw": ("sensor_msgs/msg/Image", camera_rate),
             "/stereo/left/depth": ("sensor_msgs/msg/Image", camera_rate),
+            "/stereo/left/labels": ("sensor_msgs/msg/Image", camera_rate),
             "/stereo/left/camera_info": ("sensor_msgs/msg/CameraInfo", camera_rate),
             "/stereo/right/image_raw": ("sensor_msgs/msg/Image", camera_rate)}
     for topic, (typ, rate) in want.items():
@@ -51,11 +52,15 @@ def test_sensor_topics_share_the_bag_with_the_robot_topics(dds_domain, tmp_path)
         assert all(m[1].header.stamp.sec * 10**9 + m[1].header.stamp.nanosec == m[3] for m in msgs)
     cloud = got["/lidar/points"][0][1]
     assert (cloud.height, cloud.width, cloud.header.frame_id) == (8, 64, "lidar")
-    xyz = np.frombuffer(bytes(cloud.data), dtype=np.float32).reshape(-1, 5)[:, :3]
+    xyz = np.frombuffer(bytes(cloud.data), dtype=np.float32).reshape(-1, 7)[:, :3]
     # the lidar frame is level 0.3 + 0.0675 m above the ice: the lowest return lies on it
     assert np.nanmin(xyz[:, 2]) == pytest.approx(-(0.3 + 0.0675), abs=1e-4)
     depth = got["/stereo/left/depth"][0][1]
     assert (depth.encoding, depth.width, depth.height) == ("32FC1", 64, 48)
+    labels = got["/stereo/left/labels"][0][1]
+    assert (labels.encoding, labels.width, labels.height) == ("mono16", 64, 48)
+    # the ice (material 0 of flat-ice: label 1) fills the lower half of a level camera's view
+    assert np.frombuffer(bytes(labels.data), "<u2").reshape(48, 64)[-1].tolist() == [1] * 64
     # the sensor frames in the one tf tree with the robot's links, each with one parent: the lidar is the URDF's
     # lidar link, each camera's optical frame hangs off the URDF's camera link (components/ros2/sensor_frames.py)
     parents = {}

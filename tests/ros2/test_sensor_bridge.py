@@ -46,7 +46,7 @@ def test_point_clouds_images_and_camera_info_reach_a_separate_process(dds_domain
         assert np.allclose(stamps, want, atol=1e-6), (key, stamps, want)
     cloud = got["points"][0]
     assert (cloud["height"], cloud["width"]) == (8, 64) and cloud["frame"] == "lidar"
-    assert cloud["fields"] == ["x", "y", "z", "intensity", "ring", "status"]
+    assert cloud["fields"] == ["x", "y", "z", "intensity", "ring", "status", "t", "label"]
     assert cloud["returns"] > 0 and cloud["finite_returns"] and cloud["nan_misses"]
     # the lidar frame is level 0.3 + 0.0675 m above the ice: the lowest return lies on it
     assert abs(cloud["min_z"] + 0.3 + 0.0675) < 1e-4
@@ -81,6 +81,9 @@ def test_bridge_bytes_decode_to_the_measurement():
     np.testing.assert_array_equal(np.stack([raw["x"], raw["y"], raw["z"]], axis=1), scan.points)
     np.testing.assert_array_equal(raw["intensity"], scan.intensity)
     np.testing.assert_array_equal(raw["status"], scan.status)
+    np.testing.assert_array_equal(raw["t"], scan.time)
+    np.testing.assert_array_equal(raw["label"], scan.label)
+    assert {f.name: (f.offset, f.datatype) for f in m.fields}["label"] == (24, SM.UINT16)
     c = Harness(Camera, {"link": "camera_left", "color": True, "width": 32, "height": 24}, rate=5.0, uses=USES)
     c.inputs.world = world
     frame = c.outputs()["frame"]
@@ -89,4 +92,7 @@ def test_bridge_bytes_decode_to_the_measurement():
     np.testing.assert_array_equal(pix, np.rint(np.clip(frame.image, 0, 1) * 255).astype(np.uint8))
     dm = ts.deserialize_cdr(SM.depth_image(ts, frame), SM.IMAGE)
     np.testing.assert_array_equal(np.frombuffer(dm.data.tobytes(), "<f4").reshape(24, 32), frame.depth)
+    lm = ts.deserialize_cdr(SM.label_image(ts, frame), SM.IMAGE)
+    assert (lm.encoding, lm.step, lm.height, lm.width) == ("mono16", 64, 24, 32)
+    np.testing.assert_array_equal(np.frombuffer(lm.data.tobytes(), "<u2").reshape(24, 32), frame.label)
     assert (im.header.stamp.sec, im.header.stamp.nanosec) == (0, 0) and im.header.frame_id == "component"

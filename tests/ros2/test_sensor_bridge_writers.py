@@ -17,7 +17,7 @@ def test_writers_exist_right_after_before_run(dds_domain):
     try:
         h.c.before_run(0.0, h.u)
         want = {"/lidar/points", *(f"/stereo/{side}/{t}" for side in ("left", "right")
-                                   for t in ("image_raw", "depth", "camera_info"))}
+                                   for t in ("image_raw", "depth", "labels", "camera_info"))}
         assert set(run.writers) == want                       # thing.out: unknown until its first sample
         open_topics = {row[0] for row in endpoint_rows(run.dds)}
         assert want <= open_topics, open_topics

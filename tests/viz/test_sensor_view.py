@@ -4,7 +4,8 @@ under world/sensors/<comp>/<port>, each sample logged once at its own time, read
 The scene: an EELS 1.0 (2 modules and the head) without gravity 0.3 m above a flat plane,
 pitching its head up at 0.6 rad/s about the tail, so the lidar (10 Hz) sees less ground sample
 by sample; a 64×48 camera at 5 Hz on the nose. The viewer runs at ~30 Hz. The robot is not
-visible to its sensors here, so every return lies on the plane.
+visible to its sensors here, so every return lies on the plane (motion distortion off: the logged
+points are in the lidar frame at the sample's pose, which a distorted beam's is not).
 """
 
 from __future__ import annotations
@@ -38,7 +39,8 @@ components:
   lidar:
     type: lidar
     rate: {LIDAR_HZ}
-    params: {{beams: {{kind: grid, channels: 8, horizontal_samples: 64, vertical_fov: [-30, 10]}}}}
+    params: {{beams: {{kind: grid, channels: 8, horizontal_samples: 64, vertical_fov: [-30, 10]}},
+             motion_distortion: false}}
   cam: {{type: camera, rate: {CAMERA_HZ}, params: {{width: {W}, height: {H}, model: {{kind: pinhole, fov: 90}}}}}}
 connections:
   - terrain.terrain -> scene.terrain
