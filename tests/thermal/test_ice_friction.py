@@ -1,0 +1,48 @@
+"""The ice-friction law against its table (Schulson & Fortt 2012; what is assumed: ice_friction_data.py)
+and against the statements of the source's abstract the table was built from."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from snakesim.components.thermal import IceFriction
+from snakesim.components.thermal.ice_friction import ice_mu
+from snakesim.components.thermal.ice_friction_data import MU_K, SCATTER, SPEEDS, TEMPERATURES
+from snakesim.framework import Harness
+
+
+def test_reproduces_every_table_point_within_the_scatter():
+    T, v = np.meshgrid(TEMPERATURES, SPEEDS, indexing="ij")
+    assert np.all(np.abs(ice_mu(T, v) - MU_K) <= SCATTER)
+
+
+def test_stays_in_the_measured_range_everywhere():
+    # abstract: μk of smooth surfaces from 0.15 to 0.76 over 98–263 K and 5e-8–1e-3 m/s (and clipped outside)
+    T = np.linspace(60.0, 300.0, 97)[:, None]
+    v = np.logspace(-9, 1, 101)[None, :]
+    mu = ice_mu(T, v)
+    assert mu.min() >= 0.15 - 1e-12 and mu.max() <= 0.76 + 1e-12
+
+
+def test_velocity_dependence_has_the_abstracts_shape():
+    lo, peak, hi = 1e-6, 1e-5, 1e-3
+    for T in (223.0, 263.0):                    # strengthening below ~1e-5..1e-4 m/s, weakening above
+        assert ice_mu(T, lo) < ice_mu(T, peak) > ice_mu(T, hi)
+    for T in (133.0, 173.0):                    # no significant dependence
+        mus = ice_mu(T, SPEEDS)
+        assert np.ptp(mus) < SCATTER
+    mid = ice_mu(98.0, np.logspace(-6, -4, 5))  # 98 K: flat in the middle, strengthening at both ends
+    assert np.ptp(mid) < 1e-12 and ice_mu(98.0, 5e-8) > mid[0] and ice_mu(98.0, 1e-3) > mid[-1]
+
+
+def test_component_scales_the_material_mu():
+    h = Harness(IceFriction, {"n": 2, "mu_material": 0.5, "ice_temperature": 263.0})
+    h.inputs.slip_speed = [1e-5, 1e-3]
+    out = h.outputs()
+    assert out["mu_scale"] == pytest.approx(ice_mu(263.0, [1e-5, 1e-3]) / 0.5)
+    h.inputs.ice_temperature = [98.0]
+    assert h.outputs()["mu"] == pytest.approx(ice_mu(98.0, [1e-5, 1e-3]))
+    h.inputs.ice_temperature = [-1.0]
+    with pytest.raises(ValueError, match="ice_temperature"):
+        h.outputs()
