@@ -52,6 +52,7 @@ def _build_mesh(spec: MeshSpec, ctx, **kw) -> Terrain:
 
 def builtin_terrain_kinds() -> tuple:
     """snakesim's own kinds, in the order the schema lists them (components/plugin.py registers them)."""
+    from .deformable import deformable_kind
     from .kinds import TerrainKind
 
     return (TerrainKind("plane", PlaneSpec, analytic.PlaneTerrain, _build_plane),
@@ -63,7 +64,8 @@ def builtin_terrain_kinds() -> tuple:
                         lambda spec, ctx, **kw: _build_dem(spec, ctx.base_dir, ctx.source, kw)),
             TerrainKind("obstacles", ObstaclesSpec, obstacles.ObstacleField,
                         lambda spec, ctx, **kw: _build_obstacles(spec, ctx.source, kw)),
-            TerrainKind("mesh", MeshSpec, mesh.SdfGrid, _build_mesh))
+            TerrainKind("mesh", MeshSpec, mesh.SdfGrid, _build_mesh),
+            deformable_kind())         # soft soil keeping ruts (terrain/deformable.py, terramechanics)
 
 
 def _moulin_shaft(spec: MoulinSpec):

@@ -1,0 +1,296 @@
+"""Screws on soft terrain (issue 29): the classic terramechanics curves and the soil contact's cost.
+
+    .venv/bin/python bench/soft_terrain.py [--quick] [--json FILE] [--png FILE]
+
+1. Drawbar pull against slip, one EELS 1.0 module (its two counter-rotating screws, 3 rad/s) on the snow
+   field: a towing force F opposing the motion; at steady state the screws' thrust balances it, so the
+   steady slip under F is where the thrust curve T(s) meets F. The module's weight sets the sinkage (the
+   height where the soil carries it: bisection on the contact kernel's normal force, virgin snow); T(s)
+   is the kernel's axial force at that height, the towing forces' slips found by bisection on T(s) = F.
+   Quasi-static (the screw's height and spin held), so it shows the soil law's curve, not a transient.
+2. Speed against screw rate: the forward phase of snow-screw-traverse (snow, terramechanics_contact) and of
+   surface-screw-traverse (hard ice, terrains/flat-ice.yaml, screw_sdf_contact), each at its own sim
+   settings; the tail's mean speed along the crescent's chord (+x) over the phase's last half.
+3. Cost per step against the snow grid's cell: snow-screw-traverse for a few seconds with the snow field's
+   cell set to each value (its own settings: rosenbrock_w, 20 ms); wall time per step and real-time factor.
+4. The whole schedule (45 s; --quick: the settle and the forward phase, 9 s) on snow and on hard ice: the
+   distance made good (the tail's displacement) and its path length; the snow run's rut saved beside the
+   results (soft_terrain.terrain.npz, components/terrain/deformable_files.py; soft_terrain.rut.png).
+
+Writes bench/results/soft_terrain.json and bench/results/soft_terrain.png (or the given files). --quick:
+fewer points and shorter runs (under a minute on 2 shared cores).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from snakesim.framework.session import load_session
+
+RESULTS = Path(__file__).with_name("results")
+ROOT = Path(__file__).resolve().parents[1]
+G = 9.81
+OMEGA = 3.0                      # rad/s, the scenes' screw_speed
+
+
+# -- 1. drawbar pull against slip -------------------------------------------------------------------------
+def module_screws():
+    """(screw geometry rows of one module's pair, the module's weight N) from the snow scene's robot."""
+    s = load_session("snow-screw-traverse", sim_overrides={"duration": 0.02})
+    contact = s.plan.components["contact"]
+    lay = contact.screws
+    model = s.plan.components["robot"].dyn.model
+    weight = sum(i.mass for i in model.inertias) * G / (lay.ns // 2)
+    pair = [0, 1]
+    geo = np.array([[lay.radius[k], lay.length[k], lay.lead_angle[k], float(lay.hand[k]), 1.0] for k in pair])
+    return geo, weight, [lay.names[k] for k in pair]
+
+
+class PairRig:
+    """One module's two screws, axes along +x side by side (0.25 m apart), on fresh snow, each spinning at
+    ±ω by its hand so that both push the same way; the kernel evaluated directly (no integration)."""
+
+    def __init__(self, geo, cell=0.01):
+        from snakesim.components.terrain.deformable import DeformableTerrain
+        from snakesim.components.terrain.spec import load_terrain
+        from snakesim.components.terramechanics.kernels import scratch_rows
+
+        spec = load_terrain("snow-field").soil_spec
+        self.terrain = DeformableTerrain(0.0, (-1.0, -1.0), (2.0, 2.0), cell, spec, max_tiles=16)
+        self.geo = geo.copy()
+        self.rows = np.array([[0, 0, 0], [1, 1, 1]], dtype=np.int64)
+        self.mount_R = np.stack([np.eye(3), np.eye(3)])
+        self.mount_p = np.zeros((2, 3))
+        self.r = float(geo[0, 0])
+        self.scratch = np.zeros((scratch_rows(geo[:, 0], geo[:, 1], cell), 5))
+        # each screw's spin sign makes h ω > 0: both advance along +x
+        self.joint_v = np.array([OMEGA * np.sign(geo[0, 3]), OMEGA * np.sign(geo[1, 3])])
+        self.v_ideal = OMEGA * self.r * math.tan(float(geo[0, 2]))
+
+    def forces(self, depth, slip):
+        """(Σ normal force N, Σ axial thrust N) with the envelopes' bottoms ``depth`` m into the snow and
+        the pair advancing at (1 − slip) of the ideal nut speed."""
+        from snakesim.components.terramechanics.kernels import NORMAL, THRUST, screw_soil
+
+        z = self.r - depth
+        poses = np.array([[0.0, -0.125, z, 0, 0, 0, 1.0], [0.0, 0.125, z, 0, 0, 0, 1.0]])
+        vels = np.zeros((2, 6))
+        vels[:, 0] = (1.0 - slip) * self.v_ideal
+        st = self.terrain.state
+        w, per, tot = np.zeros((2, 6)), np.zeros((2, 5)), np.zeros(2)
+        dt_, dp, on = np.zeros((2, 6, 6)), np.zeros((2, 6, 6)), np.zeros(2, dtype=np.bool_)
+        screw_soil(self.terrain.grid, self.terrain.soil, st.tile_of, st.plastic, st.yield_p, st.used, self.rows,
+                   self.geo, self.mount_R, self.mount_p, poses, vels, self.joint_v, 0.5, 0.01, False,
+                   self.scratch, w, per, tot, False, dt_, dp, on)
+        return per[:, NORMAL].sum(), per[:, THRUST].sum()
+
+    def sinkage(self, weight):
+        lo, hi = 0.0, 2.0 * self.r
+        for _ in range(50):
+            mid = 0.5 * (lo + hi)
+            if self.forces(mid, 0.0)[0] < weight:
+                lo = mid
+            else:
+                hi = mid
+        return 0.5 * (lo + hi)
+
+
+def drawbar(quick: bool) -> dict:
+    geo, weight, names = module_screws()
+    rig = PairRig(geo)
+    depth = rig.sinkage(weight)
+    slips = np.linspace(-0.2, 1.0, 7 if quick else 25)
+    thrust = [rig.forces(depth, s)[1] for s in slips]
+    # towing forces between the curve's ends; steady slip where T(s) = F (T rises with s past its minimum)
+    smin = float(slips[int(np.argmin(thrust))])
+    tows = np.linspace(0.0, 0.95 * max(thrust), 5 if quick else 10)
+    steady = []
+    for F in tows:
+        lo, hi = smin, 1.0
+        if rig.forces(depth, hi)[1] < F:
+            steady.append(None)
+            continue
+        for _ in range(40):
+            mid = 0.5 * (lo + hi)
+            if rig.forces(depth, mid)[1] < F:
+                lo = mid
+            else:
+                hi = mid
+        steady.append(0.5 * (lo + hi))
+    return {"screws": names, "module_weight_N": weight, "sinkage_m": depth, "omega_rad_s": OMEGA,
+            "slip": slips.tolist(), "thrust_N": thrust, "towing_force_N": tows.tolist(), "steady_slip": steady,
+            "max_drawbar_over_weight": max(thrust) / weight}
+
+
+# -- 2. speed against screw rate --------------------------------------------------------------------------
+def forward_speed(scene: str, rate: float, settle: float, phase: float) -> dict:
+    s = load_session(scene, overrides=[f"screw_speed={rate}", f"settle={settle}", f"phase={phase}"],
+                     sim_overrides={"duration": settle + phase})
+    t0 = time.perf_counter()
+    r = s.run()
+    wall = time.perf_counter() - t0
+    t, x = r["t"], r["tail_pose.pose"][:, 0]
+    late = t >= settle + 0.5 * phase
+    v = float(np.polyfit(t[late], x[late], 1)[0])
+    return {"scene": scene, "screw_rate_rad_s": rate, "speed_m_s": v, "outcome": r.summary["outcome"],
+            "real_time_factor": r.summary["real_time_factor"], "wall_s": wall}
+
+
+def speeds(quick: bool) -> list[dict]:
+    rates = [1.5, 3.0] if quick else [1.0, 2.0, 3.0, 4.0, 5.0]
+    settle, phase = (0.5, 2.0) if quick else (1.0, 4.0)
+    return [forward_speed(scene, w, settle, phase) for scene in ("snow-screw-traverse", "surface-screw-traverse")
+            for w in rates]
+
+
+# -- 3. cost per step against the grid's cell ----------------------------------------------------------
+def cost(quick: bool) -> list[dict]:
+    cells = [0.04, 0.02, 0.01] if quick else [0.04, 0.03, 0.02, 0.015, 0.01]
+    duration = 2.0 if quick else 4.0
+    text = (ROOT / "terrains" / "snow-field.yaml").read_text()
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for cell in cells:
+            path = Path(tmp) / f"snow-cell-{cell:g}.yaml"
+            # max_tiles: the whole patch at this cell (untouched tiles cost no memory)
+            tiles = math.ceil((20.0 / cell + 1) / 32) ** 2
+            path.write_text(text.replace("cell: 0.02", f"cell: {cell}").replace("max_tiles: 1024",
+                                                                                  f"max_tiles: {tiles}"))
+            s = load_session("snow-screw-traverse", overrides=[f"terrain={path}", "settle=0.5"],
+                             sim_overrides={"duration": duration})
+            t0 = time.perf_counter()
+            r = s.run()
+            wall = time.perf_counter() - t0
+            steps = r.summary["steps"]
+            rows.append({"cell_m": cell, "steps": steps, "wall_s": wall, "us_per_step": wall / steps * 1e6,
+                         "real_time_factor": duration / wall, "outcome": r.summary["outcome"]})
+    return rows
+
+
+def _shown(path: Path) -> str:
+    """``path`` relative to the repository when inside it (the JSON is the same on every machine)."""
+    p = Path(path).resolve()
+    return str(p.relative_to(ROOT)) if p.is_relative_to(ROOT) else str(p)
+
+
+# -- 4. the whole schedule, snow against ice; the rut -------------------------------------------------------
+def traverse(quick: bool, json_path: Path) -> list[dict]:
+    from snakesim.components.terrain.deformable_files import rut_picture, save_state
+
+    duration = 9.0 if quick else 45.0
+    rows = []
+    for scene in ("snow-screw-traverse", "surface-screw-traverse"):
+        s = load_session(scene, sim_overrides={"duration": duration})
+        t0 = time.perf_counter()
+        r = s.run()
+        wall = time.perf_counter() - t0
+        xy = r["tail_pose.pose"][:, :2]
+        row = {"scene": scene, "duration_s": duration, "outcome": r.summary["outcome"], "wall_s": wall,
+               "real_time_factor": duration / wall, "distance_made_good_m": float(np.hypot(*(xy[-1] - xy[0]))),
+               "path_length_m": float(np.hypot(*np.diff(xy, axis=0).T).sum())}
+        rep = (r.summary.get("reports") or {}).get("contact")
+        if rep and "rut" in rep:
+            terrain = s.plan.caches["contact"].terrain
+            stem = json_path.with_suffix("")
+            row["rut"] = rep["rut"]
+            row["mean_sinkage_m"] = float(np.nanmean([v for v in rep["mean_sinkage_m"] if v is not None]))
+            row["terrain_npz"] = _shown(save_state(terrain, stem.with_name(stem.name + ".terrain.npz")))
+            pic = rut_picture(terrain, stem.with_name(stem.name + ".rut.png"),
+                              title=f"{scene}: the rut after {duration:g} s")
+            row["rut_png"] = _shown(pic) if pic else None
+        rows.append(row)
+    return rows
+
+
+# -- report -------------------------------------------------------------------------------------------------
+def table(out: dict) -> str:
+    d = out["drawbar"]
+    lines = [f"1. drawbar pull, one module ({', '.join(d['screws'])}), weight {d['module_weight_N']:.1f} N, "
+             f"sinkage {100 * d['sinkage_m']:.2f} cm, {d['omega_rad_s']:g} rad/s",
+             "   slip    thrust N    drawbar/weight"]
+    lines += [f"   {s:5.2f}  {T:9.2f}    {T / d['module_weight_N']:6.3f}" for s, T in zip(d["slip"], d["thrust_N"])]
+    lines += ["   towing N   steady slip"]
+    lines += [f"   {F:8.2f}   {'—' if s is None else f'{s:.3f}'}" for F, s in zip(d["towing_force_N"], d["steady_slip"])]
+    lines += ["2. speed along the chord against screw rate", "   scene                    rad/s   m/s      RTF   outcome"]
+    lines += [f"   {r['scene']:24s} {r['screw_rate_rad_s']:5.1f}  {r['speed_m_s']:7.4f}  {r['real_time_factor']:6.1f}  "
+              f"{r['outcome']}" for r in out["speed"]]
+    lines += ["3. cost against the snow grid's cell (snow-screw-traverse, its own settings)",
+              "   cell m   steps   µs/step   RTF    outcome"]
+    lines += [f"   {r['cell_m']:6.3f}  {r['steps']:6d}  {r['us_per_step']:8.0f}  {r['real_time_factor']:5.1f}  "
+              f"{r['outcome']}" for r in out["cost"]]
+    lines += ["4. the schedule on snow and on hard ice", "   scene                    s     made good m   path m   RTF   outcome"]
+    lines += [f"   {r['scene']:24s} {r['duration_s']:4.0f}  {r['distance_made_good_m']:10.3f}  {r['path_length_m']:7.3f}  "
+              f"{r['real_time_factor']:5.1f}  {r['outcome']}" for r in out["traverse"]]
+    for r in out["traverse"]:
+        if "rut" in r:
+            u = r["rut"]
+            lines.append(f"   rut: {u['deformed_nodes']} nodes, deepest {100 * u['max_rut_depth_m']:.1f} cm, "
+                         f"{1e3 * u['rut_volume_m3']:.1f} L; mean screw sinkage {100 * r['mean_sinkage_m']:.1f} cm; "
+                         f"saved {r['terrain_npz']}, {r['rut_png']}")
+    return "\n".join(lines)
+
+
+def plot(out: dict, path: Path) -> None:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(1, 3, figsize=(14, 4))
+    d = out["drawbar"]
+    ax[0].plot(d["slip"], np.array(d["thrust_N"]) / d["module_weight_N"], marker="o")
+    ok = [(s, F) for s, F in zip(d["steady_slip"], d["towing_force_N"]) if s is not None]
+    if ok:
+        ax[0].plot([s for s, _ in ok], [F / d["module_weight_N"] for _, F in ok], "x", label="steady slip under tow")
+    ax[0].set_xlabel("slip")
+    ax[0].set_ylabel("drawbar pull / weight")
+    ax[0].set_title("one EELS 1.0 module on snow")
+    ax[0].axhline(0.0, color="k", lw=0.5)
+    ax[0].legend()
+    for scene, label in (("snow-screw-traverse", "snow"), ("surface-screw-traverse", "hard ice")):
+        rows = [r for r in out["speed"] if r["scene"] == scene]
+        ax[1].plot([r["screw_rate_rad_s"] for r in rows], [r["speed_m_s"] for r in rows], marker="o", label=label)
+    ax[1].set_xlabel("screw rate (rad/s)")
+    ax[1].set_ylabel("tail speed along the chord (m/s)")
+    ax[1].set_title("EELS 1.0, forward phase")
+    ax[1].legend()
+    c = out["cost"]
+    ax[2].loglog([r["cell_m"] for r in c], [r["us_per_step"] for r in c], marker="o")
+    ax[2].set_xlabel("snow grid cell (m)")
+    ax[2].set_ylabel("wall µs per 20 ms step")
+    ax[2].set_title("cost per step")
+    for a in ax:
+        a.grid(alpha=0.3)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--quick", action="store_true", help="fewer points, shorter runs (under a minute)")
+    ap.add_argument("--json", type=Path, default=RESULTS / "soft_terrain.json")
+    ap.add_argument("--png", type=Path, default=RESULTS / "soft_terrain.png")
+    a = ap.parse_args(argv)
+    t0 = time.perf_counter()
+    a.json.parent.mkdir(parents=True, exist_ok=True)
+    out = {"quick": a.quick, "drawbar": drawbar(a.quick), "speed": speeds(a.quick), "cost": cost(a.quick),
+           "traverse": traverse(a.quick, a.json)}
+    out["bench_wall_s"] = time.perf_counter() - t0
+    print(table(out))
+    print(f"bench wall time {out['bench_wall_s']:.1f} s")
+    a.json.write_text(json.dumps(out, indent=2) + "\n")
+    plot(out, a.png)
+    print(f"wrote {a.json}, {a.png}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,204 @@
+"""Deformable height field (kind ``deformable``): a soft soil (snow, regolith) on a flat base that keeps
+the ruts a robot leaves.
+
+    kind: deformable
+    base_height: 0.0          # m, the virgin surface (a horizontal plane)
+    origin: [-10, -10]        # m, the patch's corner (x, y); nodes every ``cell`` m
+    size: [20, 20]            # m, the patch (outside it: the base, rigid)
+    cell: 0.02                # m, node spacing
+    max_tiles: 2048           # tiles of 32 × 32 nodes that may be touched in a run (memory cap)
+    soil: {k_c: 4.37e3, k_phi: 196.72e3, n: 1.6, cohesion: 1.03e3, friction_angle: 19.7,
+           janosi_k: 0.025, elastic_k: 5.0e5, damping: 0.0}
+
+Model: Bekker–Wong pressure–sinkage, Mohr–Coulomb shear strength and Janosi–Hanamoto shear (the
+terramechanics contact, components/terramechanics/, reads ``soil``); the nodes' plastic sinkage and yield
+memory (deformable_kernels.py: the law and its elastic unloading as in Chrono's SCM) live in
+``terrain.state`` and change in place when the contact commits a step (``state.changed``), so the
+surface every consumer queries (contact, viewer, lidar) is the rutted one. Storage is sparse: a node
+table of tiles, a tile allocated from a pool of ``max_tiles`` on its first load, so a 20 × 20 m patch at
+2 cm costs memory where the robot went (a tile is 32 × 32 nodes × 2 arrays × 8 B = 16 KiB; the pool is
+allocated with calloc, so untouched tiles are not even resident).
+
+Query: the unloaded surface base − s_p, bilinear between nodes; distance and normal first-order as a
+DEM's (d = (z − h)/√(1 + |∇h|²)). Units SI, world frame, z up.
+
+Not modelled here: a DEM base (the base is a plane), soil pushed aside (bulldozing berms; the rut's
+volume vanishes, as SCM without its bulldozing option), lateral soil pressure on the rut walls.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from typing import Literal
+
+from .base import Bounds, Terrain, TerrainMesh, TerrainState
+from .deformable_kernels import TILE, empty_used, query_surface, surface
+from .spec_models import KindSpec
+
+
+class SoilSpec(BaseModel):
+    """Bekker–Wong, Mohr–Coulomb and Janosi–Hanamoto parameters of one soil (Wong, Theory of Ground
+    Vehicles, ch. 2), plus SCM's elastic unloading stiffness and vertical damping."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
+
+    k_c: float = Field(description="N/m^(n+1), cohesive modulus of deformation")
+    k_phi: float = Field(description="N/m^(n+2), frictional modulus of deformation")
+    n: float = Field(description="exponent of deformation, > 0")
+    cohesion: float = Field(ge=0, description="Pa, Mohr–Coulomb cohesion c")
+    friction_angle: float = Field(description="deg, Mohr–Coulomb internal friction angle φ, in (0, 90)")
+    janosi_k: float = Field(gt=0, description="m, Janosi–Hanamoto shear deformation modulus K")
+    elastic_k: float = Field(gt=0, description="Pa/m, elastic unloading/reloading stiffness per area (SCM)")
+    damping: float = Field(0.0, ge=0, description="Pa·s/m, vertical damping per area (SCM's damping_R)")
+
+    @field_validator("n")
+    @classmethod
+    def _n(cls, v):
+        if not v > 0:
+            raise ValueError(f"n = {v}: the Bekker exponent must be > 0 (typically 0.5 to 1.8)")
+        return v
+
+    @field_validator("friction_angle")
+    @classmethod
+    def _phi(cls, v):
+        if not 0.0 < v < 90.0:
+            raise ValueError(f"friction_angle = {v} deg: must be in (0, 90) degrees")
+        return v
+
+
+class DeformableSpec(KindSpec):
+    kind: Literal["deformable"]
+    base_height: float = Field(0.0, description="m, the virgin surface")
+    origin: tuple[float, float] = Field((-10.0, -10.0), description="m, the patch's corner")
+    size: tuple[float, float] = Field((20.0, 20.0), description="m, the patch's sides (x, y)")
+    cell: float = Field(0.02, gt=0, description="m, node spacing")
+    max_tiles: int = Field(2048, ge=1, description="tiles of 32 × 32 nodes a run may touch")
+    soil: SoilSpec
+
+    @model_validator(mode="after")
+    def _stiffness_positive(self):
+        # k_c / b + k_phi > 0 for every patch side b from one cell to the patch: k_c + k_phi·b is linear in
+        # b, so its ends decide
+        s = self.soil
+        for b in (self.cell, max(self.size)):
+            if not s.k_c + s.k_phi * b > 0:
+                raise ValueError(f"soil: k_c + k_phi·b = {s.k_c + s.k_phi * b:g} N/m^(n+1) at b = {b:g} m is not "
+                                 f"positive (k_c = {s.k_c:g}, k_phi = {s.k_phi:g}): the soil would not carry a "
+                                 f"load; give k_c + k_phi·b > 0 for b from cell to the patch size")
+        if not (self.size[0] > self.cell and self.size[1] > self.cell):
+            raise ValueError(f"size = {list(self.size)} m: each side must exceed cell = {self.cell} m")
+        return self
+
+
+class DeformableTerrain(Terrain):
+    """The deformable height field (module docstring). ``grid`` [x0, y0, cell, base, nx, ny] and ``soil``
+    [k_c, k_phi, n, c, tan φ, K, K_e, R] are float64 records the kernels read; ``source`` the file."""
+
+    kind = "deformable"
+    regions = ("surface",)
+    refine_hits = True
+    #: |∇d| bound: ruts steeper than about 70° are not expected (a rut's wall is at most the soil's
+    #: slope between two nodes); the broad phase subtracts lipschitz × radius
+    lipschitz = 3.0
+
+    def __init__(self, base_height: float, origin, size, cell: float, soil: SoilSpec, max_tiles: int = 2048,
+                 source: str = "<deformable terrain>", **kw):
+        nx = int(math.floor(size[0] / cell)) + 1
+        ny = int(math.floor(size[1] / cell)) + 1
+        ntx, nty = -(-nx // TILE), -(-ny // TILE)
+        state = TerrainState(tile_of=np.full((ntx, nty), -1, dtype=np.int64),
+                             plastic=np.zeros((max_tiles, TILE, TILE)),
+                             yield_p=np.zeros((max_tiles, TILE, TILE)),
+                             used=empty_used(max_tiles))
+        super().__init__(state=state, **kw)
+        self.grid = np.array([origin[0], origin[1], cell, base_height, nx, ny], dtype=np.float64)
+        self.cell, self.base_height, self.source = float(cell), float(base_height), source
+        self.soil_spec = soil
+        self.soil = np.array([soil.k_c, soil.k_phi, soil.n, soil.cohesion, math.tan(math.radians(soil.friction_angle)),
+                              soil.janosi_k, soil.elastic_k, soil.damping], dtype=np.float64)
+        self.max_tiles = int(max_tiles)
+
+    # -- state ----------------------------------------------------------------
+    def tiles_used(self) -> int:
+        return int(self.state.used[0])
+
+    def snapshot(self) -> dict[str, np.ndarray]:
+        """Copies of the state arrays (only the used tiles of the pool): what a run saves."""
+        k = self.tiles_used()
+        st = self.state
+        return {"tile_of": st.tile_of.copy(), "plastic": st.plastic[:k].copy(), "yield_p": st.yield_p[:k].copy(),
+                "used": st.used.copy()}
+
+    def restore(self, snap: dict[str, np.ndarray], t: float | None = None) -> None:
+        """Put a :meth:`snapshot` back, in place (bound buffers see it), and bump the version."""
+        st = self.state
+        k = int(snap["used"][0])
+        if snap["tile_of"].shape != st.tile_of.shape or k > self.max_tiles:
+            raise ValueError(f"{self.source}: snapshot of another grid (tiles {snap['tile_of'].shape}, {k} used) "
+                             f"than this terrain's (tiles {st.tile_of.shape}, max_tiles {self.max_tiles})")
+        st.tile_of[...] = snap["tile_of"]
+        st.plastic[:k] = snap["plastic"]
+        st.plastic[k:] = 0.0
+        st.yield_p[:k] = snap["yield_p"]
+        st.yield_p[k:] = 0.0
+        st.used[...] = snap["used"]
+        st.changed(t)
+
+    def rut_depth(self, x, y) -> np.ndarray:
+        """Plastic sinkage (m, ≥ 0) of the unloaded surface at points (x, y): base − h."""
+        x, y = np.broadcast_arrays(np.asarray(x, float), np.asarray(y, float))
+        h = np.array([surface(self.grid, self.state.tile_of, self.state.plastic, a, b)[0]
+                      for a, b in zip(x.ravel(), y.ravel())])
+        return (self.base_height - h).reshape(x.shape)
+
+    # -- the Terrain interface ---------------------------------------------------
+    def _query(self, p):
+        d = np.empty(p.shape[0])
+        n = np.empty((p.shape[0], 3))
+        query_surface(self.grid, self.state.tile_of, self.state.plastic, p, d, n)
+        return d, n, np.zeros(p.shape[0], dtype=np.int64)
+
+    def bounds(self) -> Bounds:
+        # the base extends beyond the patch (rigid there): unbounded in x, y
+        return Bounds(np.array([-np.inf, -np.inf, self.base_height - 1.0]),
+                      np.array([np.inf, np.inf, self.base_height]))
+
+    def display_mesh(self, center, extent, cell, cutaway) -> TerrainMesh:
+        """The surface as it is now (ruts drawn) on a grid of max(cell, terrain cell) over ``extent`` m
+        around ``center``, at most 512 nodes a side."""
+        from .display import _quads
+
+        c = np.asarray(center, dtype=float)
+        step = max(float(cell), self.cell, 2.0 * extent / 511)
+        k = max(2, int(math.ceil(2 * extent / step)) + 1)
+        xs = c[0] - extent + step * np.arange(k)
+        ys = c[1] - extent + step * np.arange(k)
+        X, Y = np.meshgrid(xs, ys, indexing="ij")
+        P = np.stack([X, Y, np.zeros_like(X)], axis=-1)
+        d = np.empty(k * k)
+        n = np.empty((k * k, 3))
+        flat = P.reshape(-1, 3)
+        query_surface(self.grid, self.state.tile_of, self.state.plastic, flat, d, n)
+        P[..., 2] = (-d / n[:, 2]).reshape(k, k)       # h = z − d·√(1 + |∇h|²), here at z = 0
+        depth = np.clip((self.base_height - P[..., 2]) / 0.1, 0.0, 1.0)
+        dc = 0.25 * (depth[:-1, :-1] + depth[1:, :-1] + depth[:-1, 1:] + depth[1:, 1:])
+        high, low = np.array([240.0, 248.0, 255.0]), np.array([150.0, 170.0, 200.0])
+        tones = (high + dc[..., None] * (low - high)).astype(np.uint8)      # ruts darker
+        return _quads(P, tones=tones)
+
+    def sensor_cell(self, extent: float, cell: float) -> float:
+        return max(cell, self.cell)
+
+
+def build_deformable(spec: DeformableSpec, context, **kw) -> DeformableTerrain:
+    return DeformableTerrain(spec.base_height, spec.origin, spec.size, spec.cell, spec.soil, spec.max_tiles,
+                             source=str(context.source), **kw)
+
+
+def deformable_kind():
+    from .kinds import TerrainKind
+
+    return TerrainKind("deformable", DeformableSpec, DeformableTerrain, build_deformable)

@@ -1,0 +1,182 @@
+"""Kernels of the deformable height field (deformable.py): sparse tiled node storage, the surface a
+consumer sees, and the soil's pressure–sinkage law with its elastic unloading (SCM).
+
+Storage. Nodes sit at x = x0 + i·cell, y = y0 + j·cell (0 ≤ i < nx, 0 ≤ j < ny). They are grouped in
+TILE × TILE tiles; ``tile_of[ti, tj]`` is the slot of tile (ti, tj) in the pool arrays, −1 while no
+contact ever touched it (its nodes are then virgin: no sinkage, no yield memory). A tile is given a slot
+on its first committed load (``slot_for``); ``used[0]`` counts the slots given, ``used[1]`` is set to 1
+when the pool was full (the component stops the run naming the terrain file and ``max_tiles``).
+
+Per node (pool arrays, shape (max_tiles, TILE, TILE)):
+
+    plastic[k, a, b]   m    plastic sinkage s_p: the rut, lasting (the unloaded surface is base − s_p)
+    yield_p[k, a, b]   Pa   the largest pressure the node has carried, σ_y: reloading below it is elastic
+
+Soil law at a node loaded by a body whose underside is at height z_b (sinkage s = base − z_b below
+the virgin surface; Bekker 1956, Wong, Theory of Ground Vehicles ch. 2; elasto-plastic split as in
+Chrono's SCM, Krenn & Hirzinger 2009):
+
+    σ_el = K_e (s − s_p)                 elastic trial (K_e the elastic stiffness per area, Pa/m)
+    σ_B  = (k_c / b + k_φ) sⁿ            Bekker–Wong yield (b the patch's smaller dimension, m)
+    σ    = min(σ_el, σ_B)                (≤ 0: no contact, the body is above the rut)
+    commit when σ_el > σ_B (plastic flow):  σ_y ← σ_B,  s_p ← s − σ_B / K_e
+
+so a first pass follows Bekker's curve, unloading rebounds by σ/K_e (the elastic part only), and a
+second pass over the rut is elastic up to the pressure that made it (it sinks less).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+#: nodes per tile side: 32 × 32 nodes of 2 cm is a 0.64 m square, about one screw's footprint
+TILE = 32
+
+# grid record: float64 array [x0, y0, cell, base, nx, ny] (m, m, m, m, count, count)
+GX0, GY0, GCELL, GBASE, GNX, GNY = range(6)
+# soil record: float64 array [k_c, k_phi, n, cohesion, tan_phi, K_janosi, K_elastic, damping]
+SKC, SKPHI, SN, SC, STANPHI, SKJ, SKE, SDAMP = range(8)
+
+
+@njit(cache=True, inline="always")
+def node_slot(tile_of, i, j):
+    """Pool slot of node (i, j)'s tile, −1 when virgin; (slot, a, b) with the node's place in its tile."""
+    return tile_of[i // TILE, j // TILE], i % TILE, j % TILE
+
+
+@njit(cache=True)
+def node_state(tile_of, plastic, yield_p, i, j):
+    """(s_p m, σ_y Pa) of node (i, j); (0, 0) for a virgin node."""
+    k, a, b = node_slot(tile_of, i, j)
+    if k < 0:
+        return 0.0, 0.0
+    return plastic[k, a, b], yield_p[k, a, b]
+
+
+@njit(cache=True)
+def slot_for(tile_of, used, i, j):
+    """The slot of node (i, j)'s tile, given one from the pool on first touch; −1 (and used[1] = 1) when
+    the pool is full."""
+    ti, tj = i // TILE, j // TILE
+    k = tile_of[ti, tj]
+    if k >= 0:
+        return k
+    if used[0] >= used[2]:          # used[2]: the pool's capacity (max_tiles)
+        used[1] = 1
+        return -1
+    k = used[0]
+    used[0] += 1
+    tile_of[ti, tj] = k
+    return k
+
+
+@njit(cache=True)
+def node_height(grid, tile_of, plastic, i, j):
+    """Unloaded surface height at node (i, j), m: base − s_p (the base outside the grid)."""
+    if i < 0 or j < 0 or i >= grid[GNX] or j >= grid[GNY]:
+        return grid[GBASE]
+    k, a, b = node_slot(tile_of, i, j)
+    if k < 0:
+        return grid[GBASE]
+    return grid[GBASE] - plastic[k, a, b]
+
+
+@njit(cache=True)
+def surface(grid, tile_of, plastic, x, y):
+    """h, ∂h/∂x, ∂h/∂y of the unloaded surface at (x, y): bilinear in the node heights (flat base outside
+    the grid)."""
+    cell = grid[GCELL]
+    fx = (x - grid[GX0]) / cell
+    fy = (y - grid[GY0]) / cell
+    i = int(math.floor(fx))
+    j = int(math.floor(fy))
+    tx, ty = fx - i, fy - j
+    h00 = node_height(grid, tile_of, plastic, i, j)
+    h10 = node_height(grid, tile_of, plastic, i + 1, j)
+    h01 = node_height(grid, tile_of, plastic, i, j + 1)
+    h11 = node_height(grid, tile_of, plastic, i + 1, j + 1)
+    h = (1 - tx) * ((1 - ty) * h00 + ty * h01) + tx * ((1 - ty) * h10 + ty * h11)
+    hx = ((1 - ty) * (h10 - h00) + ty * (h11 - h01)) / cell
+    hy = ((1 - tx) * (h01 - h00) + tx * (h11 - h10)) / cell
+    return h, hx, hy
+
+
+@njit(cache=True)
+def query_surface(grid, tile_of, plastic, p, distance, normal):
+    """First-order signed distance and outward normal of points p (n, 3) to the unloaded surface (as a DEM:
+    d = (z − h) / √(1 + h_x² + h_y²), n = (−h_x, −h_y, 1) / √(…))."""
+    for m in range(p.shape[0]):
+        h, hx, hy = surface(grid, tile_of, plastic, p[m, 0], p[m, 1])
+        s = math.sqrt(1.0 + hx * hx + hy * hy)
+        distance[m] = (p[m, 2] - h) / s
+        normal[m, 0] = -hx / s
+        normal[m, 1] = -hy / s
+        normal[m, 2] = 1.0 / s
+
+
+@njit(cache=True, inline="always")
+def bekker(soil, b, s):
+    """Bekker–Wong pressure (k_c / b + k_φ) sⁿ, Pa, at sinkage s > 0 m under a patch of smaller side b m."""
+    return (soil[SKC] / b + soil[SKPHI]) * s ** soil[SN]
+
+
+@njit(cache=True)
+def pressure(soil, b, s, s_p, s_y):
+    """(σ Pa, yields) at a node of plastic sinkage s_p and yield memory s_y loaded to total sinkage s
+    (module docstring); σ = 0 when the body is above the rut (s ≤ s_p)."""
+    if s <= s_p:
+        return 0.0, False
+    el = soil[SKE] * (s - s_p)
+    if el <= s_y:
+        return el, False
+    yb = bekker(soil, b, s)
+    if el > yb:
+        return yb, True
+    return el, False
+
+
+@njit(cache=True)
+def commit_node(grid, soil, tile_of, plastic, yield_p, used, i, j, s, b):
+    """Commit a load of total sinkage s (m) on node (i, j) under a patch of smaller side b: plastic flow
+    (a deeper rut, a higher yield memory) where the load yields the soil; an elastic load changes nothing.
+    1: the node flowed, 0: it did not, −1: it would have but the tile pool is full."""
+    if i < 0 or j < 0 or i >= grid[GNX] or j >= grid[GNY]:
+        return 0                        # outside the patch: the base is rigid there
+    s_p, s_y = node_state(tile_of, plastic, yield_p, i, j)
+    sigma, yields = pressure(soil, b, s, s_p, s_y)
+    if not yields:
+        return 0
+    k = slot_for(tile_of, used, i, j)
+    if k < 0:
+        return -1
+    a, c = i % TILE, j % TILE
+    yield_p[k, a, c] = sigma
+    plastic[k, a, c] = s - sigma / soil[SKE]
+    return 1
+
+
+@njit(cache=True)
+def press_nodes(grid, soil, tile_of, plastic, yield_p, used, ii, jj, z_body, b, commit, sigma):
+    """Pressure σ (Pa, into ``sigma``) at nodes (ii, jj) under a body whose underside is at heights
+    ``z_body`` (m), patch side b (m); with ``commit`` the loads are committed (plastic flow). Returns
+    the number of nodes that flowed, −1 when the tile pool ran out. The plate test's entry point."""
+    flows = 0
+    base = grid[GBASE]
+    for m in range(ii.shape[0]):
+        s = base - z_body[m]
+        s_p, s_y = node_state(tile_of, plastic, yield_p, ii[m], jj[m])
+        sigma[m] = pressure(soil, b, s, s_p, s_y)[0]
+        if commit and sigma[m] > 0.0:
+            f = commit_node(grid, soil, tile_of, plastic, yield_p, used, ii[m], jj[m], s, b)
+            if f < 0:
+                return -1
+            flows += f
+    return flows
+
+
+def empty_used(max_tiles: int) -> np.ndarray:
+    """The pool counter [slots given, pool full flag, capacity]."""
+    return np.array([0, 0, int(max_tiles)], dtype=np.int64)

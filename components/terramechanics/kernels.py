@@ -1,0 +1,298 @@
+"""Screw–soil kernels of the terramechanics contact (contact.py has the model; this file the loops).
+
+One call evaluates every screw against the deformable terrain's nodes (components/terrain/
+deformable_kernels.py) and, with ``commit``, writes the step's plastic sinkage into the terrain state.
+Per screw s the arrays are (ScrewGeometry, contact.py):
+
+    rows[s]  = (parent_row, screw_row, spin_dof)             int64
+    geo[s]   = (radius, length, lead_angle, hand, spin_mult)  float64
+    mount_R[s] (3, 3) column 0 the spin axis in the parent frame; mount_p[s] (3,) the centre there
+
+Outputs: ``wrenches`` (nl, 6) [f, τ about the screw link's origin], world, added to; ``per_screw``
+(ns, 5): sinkage m, slip 1, thrust N, normal force N, contacts (node count); ``totals`` [ΣF_n, contacts].
+
+With ``jac`` the same pass also fills the per-link 6×6 blocks a linearly implicit integrator reads
+(multibody/linearization.py, LinkWrenchJacobian): per node the force's velocity derivative
+
+    ∂F/∂v = ∂s_c/∂v_x ê_x ê_xᵀ + ∂s_c/∂v_h ê_x ê_hᵀ + ∂s_h/∂v_h ê_h ê_hᵀ (− R A ẑẑᵀ while loaded)
+    s_c = −A τ_max (1 − e^(−j/K)) sgn v_x,  j = |v_x| ℓ / √(v_h² + v_ε²):
+        ∂s_c/∂v_x = −A τ_max e^(−j/K) ℓ / (K √(v_h² + v_ε²))      (finite at v_x = 0: a viscous slope)
+        ∂s_c/∂v_h =  A τ_max e^(−j/K) sgn v_x · j v_h / (K (v_h² + v_ε²))
+    s_h = −ρ A τ_max (1 − e^(−ℓ/K)) v_h / √(v_h² + v_ε²):   ∂s_h/∂v_h = −ρ A τ_max (1 − e^(−ℓ/K)) v_ε² / (…)^(3/2)
+
+and its height derivative (the sinkage s falls as the node's contact point rises): ∂F/∂z =
+−σ'(s) (A ẑ + F_shear tan φ / τ_max), σ' = K_e on the elastic branch, n σ / s on Bekker's; both moved to
+the screw link's origin as X_cᵀ D X_c (contact/jacobian_kernels.py: the point velocity is X_c of the screw
+link's twist, the link's origin being on the spin axis). Left out: the patch's b, ℓ and the contact set
+moving with the pose (lower order; a W-method keeps its order with any matrix).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from snakesim.components.contact.jacobian_kernels import add_lever_quadratic, add_lever_rank1
+from snakesim.components.terrain.deformable_kernels import (GBASE, GCELL, GNX, GNY, GX0, GY0, SC, SDAMP, SKE, SKJ,
+                                                           SN, STANPHI, commit_node, node_state, pressure)
+
+# per-screw output columns
+SINKAGE, SLIP, THRUST, NORMAL, NODES = range(5)
+# scratch columns per contact node: i, j, z_b, s_ax, u (arc round the envelope from its bottom)
+_I, _J, _ZB, _SAX, _U = range(5)
+
+
+@njit(cache=True, inline="always")
+def quat_rotate(q, v0, v1, v2):
+    """R(q) v for q = (x, y, z, w) unit."""
+    x, y, z, w = q[0], q[1], q[2], q[3]
+    # v + 2w (q × v) + 2 q × (q × v)
+    cx = y * v2 - z * v1
+    cy = z * v0 - x * v2
+    cz = x * v1 - y * v0
+    dx = y * cz - z * cy
+    dy = z * cx - x * cz
+    dz = x * cy - y * cx
+    return v0 + 2.0 * (w * cx + dx), v1 + 2.0 * (w * cy + dy), v2 + 2.0 * (w * cz + dz)
+
+
+@njit(cache=True, inline="always")
+def cross(a0, a1, a2, b0, b1, b2):
+    return a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
+
+
+@njit(cache=True)
+def cylinder_underside(cx, cy, cz, a0, a1, a2, r, x, y):
+    """Height of the lower side of the infinite cylinder (centre c, unit axis a, radius r) above (x, y),
+    and its axial coordinate there; (nan, 0) when the vertical line misses it. Solves
+    |d|² − (d·a)² = r² for d = (x − cx, y − cy, z − cz), a quadratic in z; the lower root."""
+    dx, dy = x - cx, y - cy
+    # d = (dx, dy, w) with w = z − cz:  (1 − a2²) w² + 2 w (−(dx a0 + dy a1) a2) + dx² + dy² − (dx a0 + dy a1)² − r² = 0
+    da = dx * a0 + dy * a1
+    A = 1.0 - a2 * a2
+    B = -da * a2
+    C = dx * dx + dy * dy - da * da - r * r
+    disc = B * B - A * C
+    if disc < 0.0 or A < 1e-9:
+        return math.nan, 0.0
+    w = (-B - math.sqrt(disc)) / A
+    return cz + w, da + w * a2
+
+
+@njit(cache=True, inline="always")
+def _band(coef, off, half):
+    """The interval of dy where |off + coef·dy| ≤ half ((−∞, ∞) or empty when coef ≈ 0)."""
+    if abs(coef) < 1e-12:
+        return (-1e300, 1e300) if abs(off) <= half else (1e300, -1e300)
+    a, b = (-half - off) / coef, (half - off) / coef
+    return (a, b) if a <= b else (b, a)
+
+
+@njit(cache=True)
+def screw_soil(grid, soil, tile_of, plastic, yield_p, used, rows, geo, mount_R, mount_p, poses, vels, joint_v,
+               helix_ratio, v_eps, commit, scratch, wrenches, per_screw, totals, jac, d_twist, d_pose, on_link):
+    """Every screw against the soil (module docstring; the model: contact.py). Returns the number of
+    nodes a commit made flow (0 without ``commit``), −1 when it found the terrain's tile pool full. With
+    ``jac``: the screw links' blocks into ``d_twist``, ``d_pose`` (nl, 6, 6), the links with one marked in
+    ``on_link`` (the blocks of links marked before are cleared first)."""
+    cell = grid[GCELL]
+    area = cell * cell
+    x0, y0, base = grid[GX0], grid[GY0], grid[GBASE]
+    nx, ny = int(grid[GNX]), int(grid[GNY])
+    c_coh, tan_phi, kj, damp = soil[SC], soil[STANPHI], soil[SKJ], soil[SDAMP]
+    flows = 0
+    D = np.zeros((3, 3))
+    rc, gk, mk = np.zeros(3), np.zeros(3), np.zeros(3)
+    if jac:
+        for k in range(on_link.size):
+            if on_link[k]:
+                d_twist[k, :, :] = 0.0
+                d_pose[k, :, :] = 0.0
+                on_link[k] = False
+    totals[0] = 0.0
+    totals[1] = 0.0
+    for s in range(rows.shape[0]):
+        for k in range(per_screw.shape[1]):
+            per_screw[s, k] = 0.0
+        pr, sr, dof = rows[s, 0], rows[s, 1], rows[s, 2]
+        r, L, lead, hand, mult = geo[s, 0], geo[s, 1], geo[s, 2], geo[s, 3], geo[s, 4]
+        qp = poses[pr, 3:7]
+        a0, a1, a2 = quat_rotate(qp, mount_R[s, 0, 0], mount_R[s, 1, 0], mount_R[s, 2, 0])
+        m0, m1, m2 = quat_rotate(qp, mount_p[s, 0], mount_p[s, 1], mount_p[s, 2])
+        px, py, pz = poses[pr, 0], poses[pr, 1], poses[pr, 2]
+        cx, cy, cz = px + m0, py + m1, pz + m2
+        vpx, vpy, vpz = vels[pr, 0], vels[pr, 1], vels[pr, 2]
+        wpx, wpy, wpz = vels[pr, 3], vels[pr, 4], vels[pr, 5]
+        omega = mult * joint_v[dof]
+        sl, cl, tl = math.sin(lead), math.cos(lead), math.tan(lead)
+        # slip of the screw: its centre's axial speed against the ideal nut speed h ω r tan λ
+        wc0, wc1, wc2 = cross(wpx, wpy, wpz, m0, m1, m2)
+        v_axis = (vpx + wc0) * a0 + (vpy + wc1) * a1 + (vpz + wc2) * a2
+        v_ideal = hand * omega * r * tl
+        per_screw[s, SLIP] = 1.0 - v_axis / v_ideal if abs(v_ideal) > 1e-9 else 0.0
+        if abs(a2) > 0.98:
+            continue                             # standing on its end: not modelled
+        if cz - r * math.sqrt(1.0 - a2 * a2) - 0.5 * L * abs(a2) > base:
+            continue                             # wholly above the virgin surface (ruts only go down)
+        # footprint box of the cylinder in x, y
+        ex = abs(a0) * 0.5 * L + r * math.sqrt(max(0.0, 1.0 - a0 * a0))
+        ey = abs(a1) * 0.5 * L + r * math.sqrt(max(0.0, 1.0 - a1 * a1))
+        i_lo = max(0, int(math.ceil((cx - ex - x0) / cell)))
+        i_hi = min(nx - 1, int(math.floor((cx + ex - x0) / cell)))
+        j_lo = max(0, int(math.ceil((cy - ey - y0) / cell)))
+        j_hi = min(ny - 1, int(math.floor((cy + ey - y0) / cell)))
+        # the screw frame on the ground: e_down ⟂ a, towards −z; e_side = a × e_down (the arc coordinate's +)
+        dn0, dn1, dn2 = a2 * a0, a2 * a1, a2 * a2 - 1.0
+        dl = math.sqrt(dn0 * dn0 + dn1 * dn1 + dn2 * dn2)
+        dn0, dn1, dn2 = dn0 / dl, dn1 / dl, dn2 / dl
+        sd0, sd1, sd2 = cross(a0, a1, a2, dn0, dn1, dn2)
+        # per row of nodes, only the j where the vertical line can meet the finite cylinder: its footprint
+        # lies in the strip |n̂_h·d| ≤ r about the projected axis (n̂_h horizontal, ⟂ the axis) and within
+        # |ĥ·d| ≤ (L/2)|a_h| + r|a_z| along it (ĥ the axis's horizontal direction); the box alone holds ~3×
+        # the nodes for a screw at 45° in yaw
+        ah = math.sqrt(a0 * a0 + a1 * a1)
+        h0, h1 = a0 / ah, a1 / ah
+        half_ax = 0.5 * L * ah + r * abs(a2) + 1e-9
+        m = 0
+        s_lo, s_hi, pen = 1e300, -1e300, 0.0
+        for i in range(i_lo, i_hi + 1):
+            x = x0 + i * cell
+            ddx = x - cx
+            lo1, hi1 = _band(h0, -h1 * ddx, r + 1e-9)             # n̂_h·d = −h1 dx + h0 dy
+            lo2, hi2 = _band(h1, h0 * ddx, half_ax)                 # ĥ·d = h0 dx + h1 dy
+            lo, hi = max(lo1, lo2), min(hi1, hi2)
+            if lo > hi:
+                continue
+            f_lo, f_hi = (cy + lo - y0) / cell, (cy + hi - y0) / cell      # clamped before int(): ±1e300
+            jj_lo = j_lo if f_lo <= j_lo else int(math.ceil(f_lo))
+            jj_hi = j_hi if f_hi >= j_hi else int(math.floor(f_hi))
+            for j in range(jj_lo, jj_hi + 1):
+                y = y0 + j * cell
+                zb, sax = cylinder_underside(cx, cy, cz, a0, a1, a2, r, x, y)
+                if not (zb == zb) or abs(sax) > 0.5 * L:
+                    continue
+                s_p, s_y = node_state(tile_of, plastic, yield_p, i, j)
+                if zb >= base - s_p:
+                    continue                     # above the (rutted) surface
+                if m >= scratch.shape[0]:
+                    break
+                # outward radial unit n_c at the contact point; arc coordinate u = r·atan2(n·e_side, n·e_down)
+                n0 = (x - cx - sax * a0) / r
+                n1 = (y - cy - sax * a1) / r
+                n2 = (zb - cz - sax * a2) / r
+                u = r * math.atan2(n0 * sd0 + n1 * sd1 + n2 * sd2, n0 * dn0 + n1 * dn1 + n2 * dn2)
+                scratch[m, _I], scratch[m, _J], scratch[m, _ZB] = i, j, zb
+                scratch[m, _SAX], scratch[m, _U] = sax, u
+                s_lo, s_hi = min(s_lo, sax), max(s_hi, sax)
+                pen = max(pen, base - s_p - zb)
+                m += 1
+        if m == 0:
+            continue
+        # the patch: a cylinder pressed ``pen`` into the surface meets it over the chord 2√(2 r pen − pen²)
+        # across, the half angle θ0 = acos(1 − pen / r) round the envelope from the bottom; Bekker's b is the
+        # smaller of the chord and the axial extent (a node stands for one cell). Both are continuous in the
+        # pose (the deepest penetration is), so the force is: no jumps as nodes enter the patch
+        pc = min(pen, r)
+        chord = 2.0 * math.sqrt(max(0.0, 2.0 * r * pc - pc * pc))
+        b = max(cell, min(chord, s_hi - s_lo + cell))
+        u_hi = r * math.acos(1.0 - pc / r)
+        u_lo = -u_hi
+        fx = fy = fz = tx = ty = tz = 0.0
+        ox, oy, oz = poses[sr, 0], poses[sr, 1], poses[sr, 2]
+        deepest = 0.0
+        for q in range(m):
+            i, j = int(scratch[q, _I]), int(scratch[q, _J])
+            zb, sax, u = scratch[q, _ZB], scratch[q, _SAX], scratch[q, _U]
+            X, Y = x0 + i * cell, y0 + j * cell
+            sink = base - zb
+            deepest = max(deepest, sink)
+            s_p, s_y = node_state(tile_of, plastic, yield_p, i, j)
+            sigma = pressure(soil, b, sink, s_p, s_y)[0]
+            # velocity of the screw's surface at the contact point (the soil is at rest)
+            rx, ry, rz = X - px, Y - py, zb - pz
+            w0, w1, w2 = cross(wpx, wpy, wpz, rx, ry, rz)
+            q0, q1, q2 = X - cx, Y - cy, zb - cz
+            sp0, sp1, sp2 = cross(a0, a1, a2, q0, q1, q2)
+            v0 = vpx + w0 + omega * sp0
+            v1 = vpy + w1 + omega * sp1
+            v2 = vpz + w2 + omega * sp2
+            # SCM's vertical damping (sinking adds): on the envelope's motion, not the spin (a turning
+            # cylinder's surface moves up and down but its shape in the soil does not)
+            sig = max(0.0, sigma - damp * (vpz + w2))
+            fn = sig * area
+            # thread directions on the envelope: e_θ = a × n_c, across the thread e_x, along it e_h
+            n0, n1, n2 = (q0 - sax * a0) / r, (q1 - sax * a1) / r, (q2 - sax * a2) / r
+            et0, et1, et2 = cross(a0, a1, a2, n0, n1, n2)
+            ex0, ex1, ex2 = cl * a0 - hand * sl * et0, cl * a1 - hand * sl * et1, cl * a2 - hand * sl * et2
+            eh0, eh1, eh2 = hand * sl * a0 + cl * et0, hand * sl * a1 + cl * et1, hand * sl * a2 + cl * et2
+            vc = v0 * ex0 + v1 * ex1 + v2 * ex2
+            vh = v0 * eh0 + v1 * eh1 + v2 * eh2
+            # helix path since the thread entered the patch (upstream edge of the arc), half a cell for the node
+            arc = max(u - u_lo if vh >= 0.0 else u_hi - u, 0.0) + 0.5 * cell
+            ell = arc / cl
+            tau_max = c_coh + sigma * tan_phi
+            rh = math.sqrt(vh * vh + v_eps * v_eps)
+            j_c = abs(vc) * ell / rh                     # Janosi shear displacement across the thread
+            tau_c = tau_max * (1.0 - math.exp(-j_c / kj))
+            tau_h = helix_ratio * tau_max * (1.0 - math.exp(-ell / kj)) * vh / rh
+            sc = -tau_c * area * (1.0 if vc > 0.0 else -1.0 if vc < 0.0 else 0.0)
+            sh = -tau_h * area
+            f0 = sc * ex0 + sh * eh0
+            f1 = sc * ex1 + sh * eh1
+            f2 = fn + sc * ex2 + sh * eh2
+            fx += f0
+            fy += f1
+            fz += f2
+            c0, c1, c2 = cross(X - ox, Y - oy, zb - oz, f0, f1, f2)
+            tx += c0
+            ty += c1
+            tz += c2
+            per_screw[s, NORMAL] += fn
+            if jac:
+                ek = math.exp(-j_c / kj)
+                dcx = -area * tau_max * ek * ell / (kj * rh)
+                dch = area * tau_max * ek * (1.0 if vc > 0.0 else -1.0 if vc < 0.0 else 0.0) * j_c * vh / (kj * rh * rh)
+                dhh = -area * helix_ratio * tau_max * (1.0 - math.exp(-ell / kj)) * v_eps * v_eps / (rh * rh * rh)
+                ex = (ex0, ex1, ex2)
+                eh = (eh0, eh1, eh2)
+                for a in range(3):
+                    for c in range(3):
+                        D[a, c] = dcx * ex[a] * ex[c] + dch * ex[a] * eh[c] + dhh * eh[a] * eh[c]
+                if sig > 0.0:
+                    D[2, 2] -= damp * area
+                rc[0], rc[1], rc[2] = X - ox, Y - oy, zb - oz
+                add_lever_quadratic(rc, D, d_twist[sr])
+                if sig > 0.0 and sink > s_p:
+                    # σ' on the branch pressure() took: elastic (K_e (s − s_p)) or Bekker's (n σ / s)
+                    dsig = soil[SKE] if sigma == soil[SKE] * (sink - s_p) else soil[SN] * sigma / sink
+                    k_sh = tan_phi / tau_max
+                    gk[0], gk[1], gk[2] = (sc * ex0 + sh * eh0) * k_sh, (sc * ex1 + sh * eh1) * k_sh, \
+                        area + (sc * ex2 + sh * eh2) * k_sh
+                    mk[2] = -dsig
+                    add_lever_rank1(rc, gk, mk, d_pose[sr])
+                on_link[sr] = True
+            if commit:
+                f = commit_node(grid, soil, tile_of, plastic, yield_p, used, i, j, sink, b)
+                if f < 0:
+                    return -1
+                flows += f
+        wrenches[sr, 0] += fx
+        wrenches[sr, 1] += fy
+        wrenches[sr, 2] += fz
+        wrenches[sr, 3] += tx
+        wrenches[sr, 4] += ty
+        wrenches[sr, 5] += tz
+        per_screw[s, THRUST] = fx * a0 + fy * a1 + fz * a2
+        per_screw[s, SINKAGE] = deepest
+        per_screw[s, NODES] = m
+        totals[0] += per_screw[s, NORMAL]
+        totals[1] += m
+    return flows
+
+
+def scratch_rows(radius: np.ndarray, length: np.ndarray, cell: float) -> int:
+    """Nodes a screw's footprint box can hold at any orientation: ((L + 2r)/cell + 2)²."""
+    side = float(np.max(length + 2.0 * radius)) / cell + 2.0
+    return int(side * side) + 1
