@@ -45,13 +45,18 @@ def builtin_components() -> tuple:
     from .ros2.gait_commands import Ros2GaitCommands
     from .ros2.brace_commands import Ros2BraceCommands
     from .ros2.odometry_attach import Ros2Odometry, Ros2OdometryMcap
+    from .ros2.terrain_map_attach import Ros2TerrainMap, Ros2TerrainMapMcap
+    from .sensors.terrain_map_files import TerrainMapFiles
+    from .thermal import THERMAL
+    from .terramechanics import TerramechanicsContact
 
     return (Constant, Step, Sine, Gain, Sum, ZeroOrderHold, Pendulum, ViscousDamper, PointMass, SpringDamper,
             PointContact, HullContact, TerrainSource, Multibody, ScrewSdfContact, BodyContact, ScrewDrive,
             JointPid, JointSpringDamper, JointSetpoints, SerpenoidGait, HelicalGait, CsvTrajectory, Schedule, ForceTorqueSensors, FtsWallLoads,
             Imu, Odometry, TerrainMap, Tethers, WrenchSum, MobilityMonitor, VerticalMobilityEvaluation, TraverseEvaluation, TerrainClearance, JointLimits, BraceClimb, RerunSink, PlanarPose, ScrewSchedule, Ros2Publisher,
             Ros2Commands, Ros2SensorBridge, Ros2SimControl, Ros2McapRecorder, Ros2SensorMcap, Ros2TetherCommands,
-            Ros2GaitCommands, Ros2BraceCommands, Ros2Odometry, Ros2OdometryMcap, *PLACEMENT, *PERCEPTION)
+            Ros2GaitCommands, Ros2BraceCommands, Ros2Odometry, Ros2OdometryMcap, Ros2TerrainMap, Ros2TerrainMapMcap,
+            TerrainMapFiles, TerramechanicsContact, *PLACEMENT, *PERCEPTION, *THERMAL)
 
 
 def __getattr__(name):
@@ -72,6 +77,8 @@ def snakesim_add_commands(cli):
                                  "Robot descriptions: write a design's URDF for N modules, with its meshes."))
     cli.add_command(lazy_command("mcap", "snakesim.components.ros2.mcap_cli:mcap",
                                  "MCAP recordings (--ros2-mcap): recover a killed run's file."))
+    cli.add_command(lazy_command("terrain", "snakesim.components.terrain.cli:terrain",
+                                 "Terrains: write a terrain's signed-distance volume (ground truth for mappers)."))
 
 
 @hookimpl
@@ -124,10 +131,13 @@ def snakesim_register_robot_designs(registry):
 
 @hookimpl
 def snakesim_register_ray_casters(registry):
-    # the back ends sensor_scene's `ray_caster` can name: embree (perception/ray_caster.py)
+    # the back ends sensor_scene's `ray_caster` can name: embree (perception/ray_caster.py), raster
+    # (perception/raster.py: pinhole images rasterised, the rest Embree's)
+    from .perception.raster import RASTER
     from .perception.ray_caster import EMBREE
 
     registry.add_ray_caster(EMBREE)
+    registry.add_ray_caster(RASTER)
 
 
 @hookimpl
