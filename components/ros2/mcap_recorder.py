@@ -51,7 +51,7 @@ from pathlib import Path
 
 from pydantic import Field
 
-from snakesim.framework import output_files
+from snakesim.framework import Params, output_files
 from snakesim.framework.output_files import OutputError
 
 from .publisher import PublisherRun, Ros2Publisher, Ros2PublisherParams
@@ -73,6 +73,24 @@ def schema_text(ros_name: str) -> str:
 
     text, _md5 = typestore().generate_msgdef(ros_name, ros_version=2)
     return text
+
+
+class McapMirrorParams(Params):
+    """A bridge's MCAP mirror (``--ros2-mcap FILE``): the file, shared with ros2_mcap and the other mirrors."""
+
+    path: str = Field(..., description="MCAP file to write (replaced if it exists; shared with ros2_mcap)")
+    flush_period: float = Field(1.0, gt=0, description="wall s between chunk flushes (what a killed run loses)")
+    chunk_size: int = Field(CHUNK_SIZE, gt=0, description="bytes per chunk before it is written (zstd compressed)")
+
+
+def open_mirror(run, p: McapMirrorParams, channels: dict) -> None:
+    """Point a bridge's ``run`` at the shared MCAP file ``p.path`` instead of DDS: ``run.dds`` the file,
+    ``run.writer`` its writer, ``run.writers`` a :class:`McapChannel` per topic of ``channels``
+    ({topic: (ROS type name,) or (type name, qos)}), released with the run (also at interpreter exit)."""
+    run.dds = McapFile.shared(Path(p.path), p.chunk_size, p.flush_period)
+    run.writer = run.dds.writer
+    run.writers = {topic: McapChannel(run, run.dds.channel(topic, *spec)) for topic, spec in channels.items()}
+    run.finalizer = weakref.finalize(run, run.dds.release)
 
 
 class McapChannel:

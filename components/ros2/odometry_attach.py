@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import dataclasses
 import weakref
-from pathlib import Path
 
 from pydantic import Field
 
@@ -35,6 +34,7 @@ from snakesim.components.sensors.odometry import (DEFAULT_RATE, ODOMETRY_ESTIMAT
                                                   ODOMETRY_POSE, ODOMETRY_TWIST)
 from snakesim.framework import Component, Input, Uses
 
+from .mcap_recorder import McapMirrorParams, open_mirror
 from .transport import ClosedAfterRun, DdsEndpoint
 
 ODOMETRY_BRIDGE = "ros2_odometry"
@@ -135,10 +135,8 @@ class OdometryRun:
         self.finalizer, self.dds = None, None
 
 
-class Ros2OdometryMcapParams(Ros2OdometryParams):
-    path: str = Field(..., description="MCAP file to write (replaced if it exists; shared with ros2_mcap)")
-    flush_period: float = Field(1.0, gt=0, description="wall s between chunk flushes (what a killed run loses)")
-    chunk_size: int = Field(1 << 20, gt=0, description="bytes per chunk before it is written (zstd compressed)")
+class Ros2OdometryMcapParams(Ros2OdometryParams, McapMirrorParams):
+    pass
 
 
 class Ros2OdometryMcap(Ros2Odometry):
@@ -148,15 +146,9 @@ class Ros2OdometryMcap(Ros2Odometry):
     Params = Ros2OdometryMcapParams
 
     def _open(self, run: OdometryRun) -> None:
-        from .mcap_recorder import McapChannel, McapFile
-
         from .odometry_messages import ODOMETRY
 
-        run.dds = McapFile.shared(Path(self.p.path), self.p.chunk_size)
-        run.writer = run.dds.writer
-        run.writers = {topic: McapChannel(run, run.dds.channel(topic, ODOMETRY)) for topic in self._topics()}
-        run.finalizer = weakref.finalize(run, run.dds.release)      # also at interpreter exit
-        run.dds.flush_every(self.p.flush_period)
+        open_mirror(run, self.p, {topic: (ODOMETRY,) for topic in self._topics()})
 
     def _stamp(self, run, t) -> None:
         run.now_ns = int(t * 1e9 + 0.5) if t > 0 else 0

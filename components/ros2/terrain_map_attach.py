@@ -30,13 +30,13 @@ from __future__ import annotations
 import dataclasses
 import math
 import weakref
-from pathlib import Path
 
 import numpy as np
 from pydantic import Field
 
 from snakesim.framework import Component, Input
 
+from .mcap_recorder import McapMirrorParams, open_mirror
 from .transport import ClosedAfterRun, DdsEndpoint, TopicQos
 
 MAP_BRIDGE = "ros2_terrain_map"
@@ -143,10 +143,8 @@ class MapRun:
         self.finalizer, self.dds = None, None
 
 
-class Ros2TerrainMapMcapParams(Ros2TerrainMapParams):
-    path: str = Field(..., description="MCAP file to write (replaced if it exists; shared with ros2_mcap)")
-    flush_period: float = Field(1.0, gt=0, description="wall s between chunk flushes (what a killed run loses)")
-    chunk_size: int = Field(1 << 20, gt=0, description="bytes per chunk before it is written (zstd compressed)")
+class Ros2TerrainMapMcapParams(Ros2TerrainMapParams, McapMirrorParams):
+    pass
 
 
 class Ros2TerrainMapMcap(Ros2TerrainMap):
@@ -157,13 +155,8 @@ class Ros2TerrainMapMcap(Ros2TerrainMap):
 
     def _open(self, run: MapRun) -> None:
         from .map_messages import register_grid_map
-        from .mcap_recorder import McapChannel, McapFile
-
         register_grid_map()                            # the GridMap schema text comes from the typestore
-        run.dds = McapFile.shared(Path(self.p.path), self.p.chunk_size, self.p.flush_period)
-        run.writer = run.dds.writer
-        run.writers = {topic: McapChannel(run, run.dds.channel(topic, ty, MAP_QOS)) for topic, ty in self._topics()}
-        run.finalizer = weakref.finalize(run, run.dds.release)      # also at interpreter exit
+        open_mirror(run, self.p, {topic: (ty, MAP_QOS) for topic, ty in self._topics()})
 
     def _stamp(self, run, t) -> None:
         run.now_ns = int(t * 1e9 + 0.5) if t > 0 else 0
