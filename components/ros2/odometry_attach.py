@@ -23,7 +23,6 @@ out  none
 
 from __future__ import annotations
 
-import dataclasses
 import weakref
 
 from pydantic import Field
@@ -35,7 +34,7 @@ from snakesim.components.sensors.odometry import (DEFAULT_RATE, ODOMETRY_ESTIMAT
 from snakesim.framework import Component, Input, Uses
 
 from .mcap_recorder import McapMirrorParams, open_mirror
-from .transport import ClosedAfterRun, DdsEndpoint
+from .transport import BridgeRun, ClosedAfterRun, DdsEndpoint
 
 ODOMETRY_BRIDGE = "ros2_odometry"
 ODOMETRY_MCAP = "ros2_odometry_mcap"
@@ -117,22 +116,8 @@ class Ros2Odometry(ClosedAfterRun, Component[Ros2OdometryParams]):
         """Where the tick's time goes besides the messages (the MCAP recorder's log time)."""
 
 
-@dataclasses.dataclass(eq=False)
-class OdometryRun:
+class OdometryRun(BridgeRun):
     """One run's state (``u.cache``): the message templates, the participant and writers, the count."""
-
-    templates: tuple | None = None
-    dds: object = None
-    writers: dict = dataclasses.field(default_factory=dict)
-    published: int = 0
-    finalizer: object = None
-    writer: object = None          # the MCAP writer (McapChannel reads run.writer and run.now_ns)
-    now_ns: int = 0
-
-    def close(self) -> None:
-        if self.finalizer is not None:
-            self.finalizer()
-        self.finalizer, self.dds = None, None
 
 
 class Ros2OdometryMcapParams(Ros2OdometryParams, McapMirrorParams):

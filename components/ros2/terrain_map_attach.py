@@ -37,7 +37,7 @@ from pydantic import Field
 from snakesim.framework import Component, Input
 
 from .mcap_recorder import McapMirrorParams, open_mirror
-from .transport import ClosedAfterRun, DdsEndpoint, TopicQos
+from .transport import BridgeRun, ClosedAfterRun, DdsEndpoint, TopicQos
 
 MAP_BRIDGE = "ros2_terrain_map"
 MAP_MCAP = "ros2_terrain_map_mcap"
@@ -125,22 +125,10 @@ class Ros2TerrainMap(ClosedAfterRun, Component[Ros2TerrainMapParams]):
 
 
 @dataclasses.dataclass(eq=False)
-class MapRun:
+class MapRun(BridgeRun):
     """One run's state (``u.cache``): the message templates, the participant and writers, the last sample sent."""
 
-    templates: tuple | None = None
-    dds: object = None
-    writers: dict = dataclasses.field(default_factory=dict)
     sent: float = math.nan
-    published: int = 0
-    finalizer: object = None
-    writer: object = None          # the MCAP writer (McapChannel reads run.writer and run.now_ns)
-    now_ns: int = 0
-
-    def close(self) -> None:
-        if self.finalizer is not None:
-            self.finalizer()
-        self.finalizer, self.dds = None, None
 
 
 class Ros2TerrainMapMcapParams(Ros2TerrainMapParams, McapMirrorParams):
@@ -155,6 +143,7 @@ class Ros2TerrainMapMcap(Ros2TerrainMap):
 
     def _open(self, run: MapRun) -> None:
         from .map_messages import register_grid_map
+
         register_grid_map()                            # the GridMap schema text comes from the typestore
         open_mirror(run, self.p, {topic: (ty, MAP_QOS) for topic, ty in self._topics()})
 

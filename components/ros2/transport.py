@@ -42,6 +42,8 @@ e.g. ``CYCLONEDDS_URI`` with :func:`cyclone_xml`'s text (the README gives it);
 
 from __future__ import annotations
 
+import dataclasses
+
 import os
 import threading
 import weakref
@@ -478,6 +480,25 @@ class Arrivals:
 
             raise DDSException(ret, "checking the readers' waitset for arrivals")
         return ret > 0
+
+
+@dataclasses.dataclass(eq=False)
+class BridgeRun:
+    """A topic bridge's run state (``u.cache``): message templates, the participant (or the MCAP file of
+    its mirror) and writers, messages published; an MCAP mirror's writer and the stamp it logs at."""
+
+    templates: tuple | None = None
+    dds: object = None
+    writers: dict = dataclasses.field(default_factory=dict)
+    published: int = 0
+    finalizer: object = None
+    writer: object = None          # the MCAP writer (McapChannel reads run.writer and run.now_ns)
+    now_ns: int = 0
+
+    def close(self) -> None:
+        if self.finalizer is not None:
+            self.finalizer()
+        self.finalizer, self.dds = None, None
 
 
 class ClosedAfterRun:
