@@ -443,25 +443,34 @@ def _cell_root(z, i, j, ua, va, za, gdx, gdy, dz, length, first):
     return best if 0.0 <= best <= length else -1.0
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _walk_start(gx0, gy0, gdx, gdy, lo, ncols, nrows):
+    """A 2-D DDA's start over a grid of ncols × nrows units, the ray at g0 + t·gd (grid units): the unit
+    (column j, row i) it is in at t = lo, its steps (sx, sy), and for the far borders column j + bx,
+    row i + by, reached at t = (border)·inverse, the offsets (bx, by) and inverses (ix, iy; 0 where the
+    ray runs along the axis)."""
+    gx, gy = gx0 + lo * gdx, gy0 + lo * gdy
+    j, i = int(math.floor(gx)), int(math.floor(gy))
+    if gdx < 0.0 and j == gx:          # on a border going down: the unit below it
+        j -= 1
+    if gdy < 0.0 and i == gy:
+        i -= 1
+    j, i = min(max(j, 0), ncols - 1), min(max(i, 0), nrows - 1)
+    sx = 1 if gdx > 0.0 else -1
+    sy = 1 if gdy > 0.0 else -1
+    bx, by = (1 if gdx > 0.0 else 0) - gx0, (1 if gdy > 0.0 else 0) - gy0
+    ix = 1.0 / gdx if gdx != 0.0 else 0.0
+    iy = 1.0 / gdy if gdy != 0.0 else 0.0
+    return j, i, sx, sy, bx, by, ix, iy
+
+
 @njit(cache=True, nogil=True)
 def _cells(z, cell_max, gx0, gy0, gdx, gdy, oz, dz, lo, hi, first, hit):
     """The cell walk over t in [lo, hi] (the ray inside the grid there): the first root of
     ``_cell_root`` in the cells the ray crosses, from the one it is in at lo; -> t (hit: row, column,
     u), NO_CROSSING or STARTS_INSIDE (``first``: lo is the start of the whole walk)."""
     ny, nx = z.shape
-    gx, gy = gx0 + lo * gdx, gy0 + lo * gdy
-    j, i = int(math.floor(gx)), int(math.floor(gy))
-    if gdx < 0.0 and j == gx:          # on a cell border going down: the cell below it
-        j -= 1
-    if gdy < 0.0 and i == gy:
-        i -= 1
-    j, i = min(max(j, 0), nx - 2), min(max(i, 0), ny - 2)
-    sx = 1 if gdx > 0.0 else -1
-    sy = 1 if gdy > 0.0 else -1
-    # the cell's far borders: column j + bx, row i + by, reached at t = (border − g0)·inverse
-    bx, by = (1 if gdx > 0.0 else 0) - gx0, (1 if gdy > 0.0 else 0) - gy0
-    ix = 1.0 / gdx if gdx != 0.0 else 0.0
-    iy = 1.0 / gdy if gdy != 0.0 else 0.0
+    j, i, sx, sy, bx, by, ix, iy = _walk_start(gx0, gy0, gdx, gdy, lo, nx - 1, ny - 1)
     ta = lo
     for _ in range(nx + ny + 2):
         tx = (j + bx) * ix if gdx != 0.0 else math.inf
@@ -530,18 +539,7 @@ def _crossing(z, cell_max, block_max, top, x0, y0, res, ox, oy, oz, dx, dy, dz, 
     # the block walk: the cells' walk in block units
     nby, nbx = block_max.shape
     bx0, by0, bdx, bdy = gx0 / BLOCK, gy0 / BLOCK, gdx / BLOCK, gdy / BLOCK
-    gx, gy = bx0 + lo * bdx, by0 + lo * bdy
-    j, i = int(math.floor(gx)), int(math.floor(gy))
-    if bdx < 0.0 and j == gx:
-        j -= 1
-    if bdy < 0.0 and i == gy:
-        i -= 1
-    j, i = min(max(j, 0), nbx - 1), min(max(i, 0), nby - 1)
-    sx = 1 if bdx > 0.0 else -1
-    sy = 1 if bdy > 0.0 else -1
-    bx, by = (1 if bdx > 0.0 else 0) - bx0, (1 if bdy > 0.0 else 0) - by0
-    ix = 1.0 / bdx if bdx != 0.0 else 0.0
-    iy = 1.0 / bdy if bdy != 0.0 else 0.0
+    j, i, sx, sy, bx, by, ix, iy = _walk_start(bx0, by0, bdx, bdy, lo, nbx, nby)
     ta = lo
     for _ in range(nbx + nby + 2):
         tx = (j + bx) * ix if bdx != 0.0 else math.inf
