@@ -64,7 +64,10 @@ def load_mesh_file(path: Path, where: str, filename: str | None = None):
         raise MultibodyModelError(f"{where}: mesh {name} cannot be read as {path.suffix.lower()[1:].upper()} "
                                   f"(a binary or corrupt file?{why}); {valid}") from None
     if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
-        raise MultibodyModelError(f"{where}: mesh {name} holds no triangles; {valid}")
+        # random bytes come here too when a text-encoding detector is installed (trimesh then decodes them as
+        # an empty text file rather than raising): the same words either way
+        raise MultibodyModelError(f"{where}: mesh {name} cannot be read as {path.suffix.lower()[1:].upper()} "
+                                  f"(a binary or corrupt file? it holds no triangles); {valid}")
     return mesh
 
 

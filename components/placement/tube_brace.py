@@ -85,7 +85,10 @@ def fit_leaning_tube_brace(robot: RobotModel, terrain, q: list[float], pose: dic
     free = ~np.isin(link_of, list(touching))
     lo, hi = robot.position_limits()
     shaped = [i for i, kind in enumerate(robot.joint_kinds) if kind in kinds]
-    iq = [model.joints[model.getJointId(robot.joints[i])].idx_q for i in range(len(robot.joints))]
+    # one-coordinate joints (bends, twists) take q; continuous ones (screws: (cos, sin) in Pinocchio) keep
+    # the neutral (1, 0): writing their angle 0 into cos collapsed the screw links' rotation
+    hinge = [i for i, j in enumerate(robot.joints) if model.joints[model.getJointId(j)].nq == 1]
+    iq = [model.joints[model.getJointId(robot.joints[i])].idx_q for i in hinge]
     q0 = np.asarray(q, dtype=float)
     p0 = np.asarray(pose["position"], dtype=float)
     R0 = Rotation.from_quat(pose["quaternion"])
@@ -100,7 +103,7 @@ def fit_leaning_tube_brace(robot: RobotModel, terrain, q: list[float], pose: dic
         p, R, qq = state(x)
         c = pin.neutral(model)
         c[:3], c[3:7] = p, R.as_quat()
-        c[iq] = qq
+        c[iq] = qq[hinge]
         pin.framesForwardKinematics(model, data, c)
         out = np.empty((len(link_of), 3))
         for row in rows:
