@@ -47,7 +47,7 @@ def _build_moulin(spec: MoulinSpec, ctx, **kw) -> Terrain:
 
 def _build_mesh(spec: MeshSpec, ctx, **kw) -> Terrain:
     return mesh.mesh_terrain(ctx.base_dir / spec.file, spec.cells, spec.resolution, spec.padding, spec.inside,
-                             spec.open_surface, store=ctx.store, **kw)
+                             spec.open_surface, store=ctx.store, sign=spec.sign, exact_band=spec.exact_band, **kw)
 
 
 def builtin_terrain_kinds() -> tuple:

@@ -489,6 +489,15 @@ def _sdf(t: SdfGrid) -> TerrainMesh:
         import trimesh
 
         m = trimesh.load(src, force="mesh")
+        # faces drawn facing free space whatever the file's winding (an imported scan's faces face the ice,
+        # `inside: free`): a face whose normal leads into less signed distance is turned round
+        c, n = m.triangles_center, m.face_normals
+        step = 0.25 * t.h
+        into_ice = t.query(c + step * n).distance < t.query(c - step * n).distance
+        if into_ice.any():
+            f = m.faces.copy()
+            f[into_ice] = f[into_ice][:, ::-1]
+            m = trimesh.Trimesh(m.vertices, f, process=False)
         m.unmerge_vertices()                         # flat faces: ice blocks have sharp edges
         v = np.asarray(m.vertices, dtype=np.float32)
         col = np.tile(np.append(ICE[0], 255).astype(np.uint8), (len(v), 1))

@@ -15,6 +15,21 @@ free space is inside. A mesh that is not watertight is rejected unless
 orientation (pseudonormal) and is only meaningful near the surface.
 Outside the grid box: d = d(nearest grid point) + the distance to the box
 when that is positive, else d(nearest grid point).
+
+``sign``: ``pseudonormal`` (default) — libigl's sign from the closest
+feature's angle-weighted pseudonormal: the side the face normals point to is
+the mesh's outside; ``winding_number`` — the generalised winding number
+(terrain/mesh_winding.py): the side the mesh encloses (|w| ≥ ½) is its
+inside whichever way the normals point, so an open scanned shaft with
+``inside: free`` has its void free and its ice solid away from the wall too
+(beyond an open end, past the opening's plane, nothing is enclosed: solid
+with ``inside: free``). A mesh that is not watertight is accepted with it.
+
+``exact_band`` (m, default 0: off): where the grid's |d| < exact_band the
+query is the exact point–triangle distance, its normal (p − closest)/d and
+its sign the closest feature's pseudonormal, oriented like the grid
+(terrain/mesh_exact.py); at the band's edge the field steps by the grid's
+own error (≲ h). The band must fit in the padding (so in the grid).
 """
 
 from __future__ import annotations
@@ -29,20 +44,27 @@ from snakesim.framework.limits import fmt_bytes, memory_limit_bytes
 
 from . import store as _store
 from .base import Bounds, Terrain
+from .mesh_exact import INDEX_VERSION, NearSurface, cell_lists, near_radius
 
 MESH_SUFFIXES = (".obj", ".stl", ".ply")
+SIGNS = ("pseudonormal", "winding_number")
 SDF_VERSION = 1   # bump when the grid computation changes (invalidates the store)
 #: incremented by every grid computation (tests check the cache with it)
 compute_count = 0
 
 
 def compute_sdf_grid(vertices: np.ndarray, faces: np.ndarray, lo: np.ndarray, h: float,
-                     shape: tuple[int, int, int]) -> np.ndarray:
-    """Signed distance (negative inside the mesh) at the grid nodes lo + h·(i, j, k), shape (nx, ny, nz)."""
+                     shape: tuple[int, int, int], sign: str = "pseudonormal") -> np.ndarray:
+    """Signed distance (negative inside the mesh) at the grid nodes lo + h·(i, j, k), shape (nx, ny, nz);
+    ``sign`` as the module docstring says."""
     global compute_count
     compute_count += 1
     axes = [lo[a] + h * np.arange(shape[a]) for a in range(3)]
     pts = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+    if sign == "winding_number":
+        from .mesh_winding import winding_signed_distance
+
+        return winding_signed_distance(vertices, faces, pts).reshape(shape)
     try:
         import igl
     except ImportError:   # slow fallback (trimesh: positive inside, hence the minus)
@@ -99,12 +121,15 @@ class SdfGrid(Terrain):
     kind = "mesh"
     regions = ("surface",)
 
-    def __init__(self, values: np.ndarray, lo, h: float, source: str = "<grid>", **kw):
+    def __init__(self, values: np.ndarray, lo, h: float, source: str = "<grid>",
+                 near_surface: NearSurface | None = None, **kw):
         super().__init__(**kw)
         self.values = np.ascontiguousarray(values, dtype=np.float64)
         self.lo, self.h = np.asarray(lo, dtype=np.float64), float(h)
         self.hi = self.lo + self.h * (np.array(self.values.shape) - 1)
         self.source = source
+        #: the exact band (terrain/mesh_exact.py), or None: the grid everywhere
+        self.near_surface = near_surface
 
     #: the mesh is the imported file (the grid is the approximation): ray hits on it are exact
     refine_hits = False
@@ -122,7 +147,10 @@ class SdfGrid(Terrain):
     def _query(self, p):
         d = np.empty(len(p))
         n = np.empty((len(p), 3))
-        _trilinear(self.values, self.lo, self.h, np.ascontiguousarray(p), d, n)
+        p = np.ascontiguousarray(p)
+        _trilinear(self.values, self.lo, self.h, p, d, n)
+        if self.near_surface is not None:
+            self.near_surface.refine(p, d, n)
         return d, n, np.zeros(len(p), dtype=np.int64)
 
     def bounds(self):
@@ -179,16 +207,23 @@ def _trilinear(v, lo, h, p, d_out, n_out):
 
 
 def mesh_terrain(path: str | Path, cells: int = 128, resolution: float | None = None, padding: float = 0.1,
-                 inside: str = "solid", open_surface: bool = False, store=None, **kw) -> SdfGrid:
-    """Load a mesh file and return its SDF grid terrain (from the store when cached)."""
+                 inside: str = "solid", open_surface: bool = False, store=None, sign: str = "pseudonormal",
+                 exact_band: float = 0.0, **kw) -> SdfGrid:
+    """Load a mesh file and return its SDF grid terrain (grid and exact band's cell lists from the store
+    when cached)."""
     path = Path(path)
     mesh = load_mesh(path)
-    if not open_surface and not mesh.is_watertight:
+    if sign not in SIGNS:
+        raise ConfigError(f"sign must be one of {', '.join(SIGNS)}, got {sign!r}", str(path), "sign")
+    if not open_surface and sign == "pseudonormal" and not mesh.is_watertight:
         raise ConfigError("mesh is not watertight, so inside/outside is undefined; repair it (holes, "
-                          "non-manifold edges) or set 'open_surface: true' to sign by face orientation",
-                          str(path))
+                          "non-manifold edges), set 'open_surface: true' to sign by face orientation or "
+                          "'sign: winding_number' to sign by the side the mesh encloses", str(path))
     if inside not in ("solid", "free"):
         raise ConfigError(f"inside must be 'solid' or 'free', got {inside!r}", str(path), "inside")
+    if not (np.isfinite(exact_band) and 0 <= exact_band <= padding):
+        raise ConfigError(f"exact_band = {exact_band} m: need 0 <= exact_band <= padding ({padding} m), so that "
+                          "the band lies inside the grid", str(path), "exact_band")
     lo_m, hi_m = mesh.bounds
     lo = lo_m - padding
     ext = (hi_m + padding) - lo
@@ -199,13 +234,40 @@ def mesh_terrain(path: str | Path, cells: int = 128, resolution: float | None = 
     _check_grid_size(path, h, shape, ext)
     params = {"v": SDF_VERSION, "lo": lo.round(12).tolist(), "h": h, "shape": shape,
               "open": bool(open_surface)}
-    key = _store.content_key(path.read_bytes(), params)
+    if sign != "pseudonormal":              # the default's key (and store entry) is as it always was
+        params["sign"] = sign
+    data = path.read_bytes()
+    key = _store.content_key(data, params)
     entry = _store.load_entry(key, store)
     if entry is None:
-        values = compute_sdf_grid(np.asarray(mesh.vertices), np.asarray(mesh.faces), lo, h, shape)
+        values = compute_sdf_grid(np.asarray(mesh.vertices), np.asarray(mesh.faces), lo, h, shape, sign=sign)
         _store.save_entry(key, {"values": values, "lo": lo, "h": np.array(h)}, store)
     else:
         values = entry["values"]
+    flip = -1.0 if inside == "free" else 1.0
+    near = None
+    if exact_band > 0:
+        near = _near_surface(path, data, params, mesh, values, lo, h, exact_band, sign, flip, store)
     if inside == "free":
         values = -values
-    return SdfGrid(values, lo, h, source=str(path), **kw)
+    return SdfGrid(values, lo, h, source=str(path), near_surface=near, **kw)
+
+
+def _near_surface(path, data: bytes, params: dict, mesh, values, lo, h: float, band: float, sign: str,
+                  flip: float, store) -> NearSurface:
+    """The exact band: the cell lists and the normals' orientation against the grid's sign (store entry
+    next to the grid's, keyed by the grid's parameters and the band)."""
+    V, F = np.asarray(mesh.vertices), np.asarray(mesh.faces)
+    key = _store.content_key(data, {**params, "exact_band": band, "index": INDEX_VERSION})
+    entry = _store.load_entry(key, store)
+    if entry is None:
+        start, tris = cell_lists(V, F, lo, h, np.array(values.shape) - 1, near_radius(h, band), str(path))
+        o = 1.0
+        if sign == "winding_number":
+            from .mesh_winding import orientation
+
+            o = orientation(V, F, values, lo, h)
+        _store.save_entry(key, {"start": start, "tris": tris, "orientation": np.array(o)}, store)
+    else:
+        start, tris, o = entry["start"], entry["tris"], float(entry["orientation"])
+    return NearSurface(V, F, lo, h, values.shape, band, o * flip, (start, tris))

@@ -198,6 +198,20 @@ class MeshSpec(_Base):
     padding: float = Field(0.1, ge=0, description="m around the mesh")
     inside: Literal["solid", "free"] = "solid"
     open_surface: bool = False
+    sign: Literal["pseudonormal", "winding_number"] = Field(
+        "pseudonormal", description="pseudonormal: the side the face normals point to is outside; "
+                                    "winding_number: the side the mesh encloses (|w| >= 1/2) is inside, whichever "
+                                    "way its normals point (open scans; terrain/mesh_winding.py)")
+    exact_band: float = Field(0.0, ge=0, description="m; where the grid's |d| is below this, the exact "
+                                                     "point-triangle distance (terrain/mesh_exact.py); 0: the grid "
+                                                     "everywhere")
+
+    @model_validator(mode="after")
+    def _band_in_grid(self):
+        if self.exact_band > self.padding:
+            raise ValueError(f"exact_band = {self.exact_band} m is larger than padding = {self.padding} m: the band "
+                             f"must lie inside the grid (raise padding or lower exact_band)")
+        return self
 
 
 class _FiniteModel(_Model):
