@@ -69,3 +69,16 @@ def sdf_command(name, output, resolution, bounds):
         raise click.ClickException(str(e)) from None
     click.echo(f"wrote {output}: {' x '.join(map(str, shape))} points at {resolution:g} m from "
                f"{np.round(origin, 6).tolist()} ({t.name})", err=True)
+
+
+def _register_scan_commands():
+    # the field-scan commands live with the scan package (components/scan/); their modules import Open3D and
+    # laspy lazily, so `snakesim --help` stays quick without the [scan] extra
+    from snakesim.components.scan.import_cli import import_command
+    from snakesim.components.scan.synthetic_cli import scan_command
+
+    terrain.add_command(import_command)
+    terrain.add_command(scan_command)
+
+
+_register_scan_commands()
