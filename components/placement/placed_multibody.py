@@ -19,17 +19,24 @@ fixed before the first step, and no other component may write another's state.
 
 from __future__ import annotations
 
-from pydantic import Field
+from pydantic import Field, field_validator
+
+from snakesim.framework import Params
 
 from ..multibody.component import Multibody, MultibodyParams
 from ..multibody.robot_model import RobotModel, RobotSource
-from .fit import fit_shape
-from .shapes import Shape
+from .shapes import Shape, shape_of
 
 
 class PlacedMultibodyParams(MultibodyParams):
-    shape: Shape | None = Field(None, description="initial shape guess; replaces q0 and the base pose")
+    shape: Shape | Params | None = Field(None, description="initial shape guess (a curve, joints, or a registered "
+                                         "self-placing kind: shaft_brace); replaces q0 and the base pose")
     limits: dict[str, float] = Field(default_factory=dict, description="rad per joint kind (bend, twist) for the fit")
+
+    @field_validator("shape", mode="before")
+    @classmethod
+    def _by_kind(cls, value):
+        return shape_of(value)          # the kind's own Params (shapes.py: registered placers)
 
 
 class PlacedMultibody(Multibody):
@@ -41,7 +48,7 @@ class PlacedMultibody(Multibody):
         if p.shape is not None:
             # the robot Multibody.setup() builds (RobotModel.of is memoised: the same object)
             robot = RobotModel.of(RobotSource.of(p))
-            pl = fit_shape(robot, p.shape, p.limits)
+            pl = p.shape.place(robot, p.limits)
             self.placement = pl
             self.p = p.model_copy(update={"q0": pl.q0, "base_position": pl.base_position,
                                           "base_quaternion": pl.base_quaternion})

@@ -13,6 +13,11 @@ frame (x ahead, z up)::
     s_curve(A, λ, φ0)    c(x) = (x, A sin(2π x/λ + φ0), 0), re-sampled by arc length
     joints               no curve: the user's joint vector is the shape (q0 as given)
 
+Shape kinds that place the robot themselves (a brace surveyed and fitted in a shaft: shaft_brace.py) are
+Params classes with a ``kind`` literal and ``place(robot, limits) -> Placement``, registered with
+:func:`register_placer`; placed_multibody validates its ``shape`` by kind against them (:func:`shape_of`),
+and every shape is placed by its own ``place``.
+
 The curve is the path of the backbone (the joint axes' intersection points
 along the chain); the fit (fit.py) puts the robot's bend points on it.
 """
@@ -61,6 +66,12 @@ class Shape(Params):
     phase: float = Field(0.0, description="rad: helix start angle φ0 / s-curve phase φ0")
     q: dict[str, float] | list[float] | None = Field(None, description="joints kind: joint angles by name/pattern or vector")
     pose: Pose = Field(default_factory=Pose)
+
+    def place(self, robot, limits: dict | None = None):
+        """Initial joint angles and tail pose: the fit of fit.py."""
+        from .fit import fit_shape
+
+        return fit_shape(robot, self, limits)
 
     @model_validator(mode="after")
     def _check(self):
@@ -111,3 +122,31 @@ def world_curve(shape: Shape, length: float, n: int = 4001) -> np.ndarray:
     """The curve in the world: pose.position + R(pose) · local point, (n, 3)."""
     R = shape.pose.rotation()
     return local_curve(shape, length, n) @ R.T + np.asarray(shape.pose.position, float)
+
+
+#: shape kinds that place themselves: kind -> Params class with ``place(robot, limits) -> Placement``
+PLACERS: dict[str, type[Params]] = {}
+
+
+def register_placer(cls: type[Params]) -> type[Params]:
+    """Register a self-placing shape kind (its ``kind`` field's default names it)."""
+    kind = cls.model_fields["kind"].default
+    known = PLACERS.get(kind)
+    if kind in KINDS or (known is not None and (known.__module__, known.__qualname__) != (cls.__module__,
+                                                                                         cls.__qualname__)):
+        raise ValueError(f"shape kind '{kind}' is already registered")
+    PLACERS[kind] = cls
+    return cls
+
+
+def shape_of(value):
+    """A ``shape:`` mapping as its kind's Params: a registered placer's, else :class:`Shape` (which names the
+    kinds it knows; the error adds the placers')."""
+    if isinstance(value, dict) and value.get("kind") in PLACERS:
+        return PLACERS[value["kind"]].model_validate(value)
+    if isinstance(value, dict):
+        if value.get("kind", "straight") not in KINDS:
+            raise ValueError(f"shape kind '{value.get('kind')}' is unknown: valid kinds are "
+                             f"{', '.join(KINDS + tuple(PLACERS))}")
+        return Shape.model_validate(value)
+    return value
