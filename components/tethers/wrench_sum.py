@@ -51,17 +51,22 @@ class WrenchSum(Component[WrenchSumParams]):
             raise ValueError(f"{self.name}: no link count: give 'nl', or put it in a scene with a multibody "
                              f"(it takes the robot's)")
         self._terms = [(f"u{i}", s) for i, s in enumerate(self.p.signs)]
+        self._jacobian = None
 
     def port_jacobian(self, port, t, x, u, y):
         """∂y/∂u_i = sign_i·I: passes the inputs' Jacobians on (the contacts' LinkWrenchJacobian reaches the
         multibody through a sum only so, components/multibody/linearization._link_wrench_terms; without it
-        rosenbrock_w integrates the summed contact forces explicitly, and stiff friction chatters)."""
-        n = 6 * self.nl
-        i = np.arange(n)
-        return Elementwise(n, tuple((name, i, i, np.full(n, float(s))) for name, s in self._terms))
+        rosenbrock_w integrates the summed contact forces explicitly, and stiff friction chatters). Constant:
+        built once, and the same object each call, so the linearization's check of the sum's structure
+        (keyed on the declaration's identity) runs once, not at every Jacobian."""
+        if self._jacobian is None:
+            n = 6 * self.nl
+            i = np.arange(n)
+            self._jacobian = Elementwise(n, tuple((name, i, i, np.full(n, float(s))) for name, s in self._terms))
+        return self._jacobian
 
     def output(self, t, x, u, y):
         acc = y.y
         acc[:] = 0.0
         for name, s in self._terms:          # at most four terms: a loop over ports, not joints
-            acc += s * getattr(u, name)
+            acc += getattr(u, name) if s == 1.0 else s * getattr(u, name)    # 1·u is u: no temporary

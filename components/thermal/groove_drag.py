@@ -19,12 +19,15 @@ of the order of ice's compressive strength at slow loading — this model's assu
 a source. Its velocity slope is declared to the implicit step (a LinkWrenchJacobian: ∂f/∂v_S =
 −F_g (P/s − w wᵀP/s³), P = (I − n̂n̂ᵀ)(I − ââᵀ), s = sqrt(|w|² + v_ε²); the rotation of â and n̂ is left
 out, as the contact leaves out the rotation of its normals), so a stiff wall costs no stability at a 10 ms
-step. n̂ is sampled at the component's ``rate`` (a terrain query at each screw's centre, held between
-samples: the wall turns slowly under a screw); before the first sample, or with no terrain wired, n̂ = 0.
+step. n̂ is a terrain query at each screw's centre, made at the component's ``rate`` once any screw has
+moved ``normal_distance`` (5 mm) from where its normal was last sampled, held between (the wall turns
+slowly under a screw: on a plane nothing changes; on a wall of curvature radius R the held normal is off by
+at most ~normal_distance / R rad); before the first sample, or with no terrain wired, n̂ = 0.
 
 Also out: ``travel_speed`` = |w| per screw, the speed at which the screw leaves its groove along the wall
 (screw_heat's groove relaxation reads it; a screw moving into the wall as it melts in does not leave its
-groove).
+groove), and ``wall_force`` = F_g per screw, the force it takes to push the screw out across the groove's
+wall (melt_climb_watch compares it with the screw's traction to name an embedded screw).
 
 
 in   link_poses[nl, 7], link_velocities[nl, 6]   from the multibody
@@ -32,6 +35,7 @@ in   link_poses[nl, 7], link_velocities[nl, 6]   from the multibody
      penetration[ns] m                           screw_heat.penetration
 out  wrenches[nl, 6]   N, N·m (world, about link origins; to a wrench_sum with the contact's)
      travel_speed[ns]  m/s
+     wall_force[ns]    N, F_g
 uses robot: RobotModel (the multibody's): the screw layout (components/contact/robot_screws.py)
 """
 
@@ -41,6 +45,7 @@ import numpy as np
 from pydantic import Field
 
 from snakesim.components.contact.robot_screws import screw_layout
+from snakesim.components.multibody.linearization import LinkWrenchJacobian
 from snakesim.components.multibody.robot_model import RobotModel
 from snakesim.components.multibody.robot_ports import link_shape
 from snakesim.components.terrain.base import Terrain
@@ -54,6 +59,8 @@ class GrooveDragParams(Params):
     wall_strength: float = Field(1e6, ge=0, description="Pa, σ_w: the groove wall's crushing resistance")
     thread_depth: float = Field(0.0175, gt=0, description="m, h_t (screw_heat's)")
     v_eps: float = Field(1e-3, gt=0, description="m/s, the regularisation of the wall's Coulomb law")
+    normal_distance: float = Field(0.005, ge=0, description="m: the wall's normal at a screw is sampled again once "
+                                   "the screw has moved this far (per axis) since its last sample (0: every sample)")
 
 
 def _per_screw(c):
@@ -74,6 +81,7 @@ class GrooveDrag(Component[GrooveDragParams]):
     terrain = Input(type=Terrain, default=None)
     wrenches = Output(shape=link_shape(6), unit=None, feedthrough=True)
     travel_speed = Output(shape=_per_screw, unit="m/s", feedthrough=True, names=_names)
+    wall_force = Output(shape=_per_screw, unit="N", feedthrough=True, names=_names)
 
     def setup(self):
         if self.rate is None:
@@ -89,21 +97,32 @@ class GrooveDrag(Component[GrooveDragParams]):
         return np.zeros(3 * self.ns)           # the wall's normal at each screw (0: not known yet)
 
     def update(self, t, xd, u):
-        if u.terrain is not None:
-            xd[:] = u.terrain.query(np.asarray(u.link_poses)[self._row, :3]).normal.ravel()
+        if u.terrain is None:
+            return
+        centres = np.asarray(u.link_poses)[self._row, :3]
+        c = u.cache
+        last = c["queried_at"] if c is not None and c["terrain"] is u.terrain else None
+        # the wall turns slowly under a screw: ask the terrain again once a screw has moved normal_distance
+        # from where its normal was sampled (a plane's normal is the same anywhere: no change at all there)
+        if last is None or np.abs(centres - last).max() > self.p.normal_distance:
+            xd[:] = u.terrain.query(centres).normal.ravel()
+            if c is not None:
+                c["queried_at"], c["terrain"] = centres.copy(), u.terrain
 
     def make_cache(self, x, u, y):
         nl, ns, p = self.robot.nl, self.ns, self.p
         y.wrenches[:] = 0.0                       # only the screws' rows are ever written
-        c = {"d_twist": np.zeros((nl, 6, 6)), "d_pose": np.zeros((nl, 6, 6)), "F": np.zeros(ns),
+        c = {"d_twist": np.zeros((nl, 6, 6)), "d_pose": np.zeros((nl, 6, 6)),
              "vp": np.zeros((ns, 3)), "axis": np.zeros((ns, 3)), "on": np.zeros(ns, dtype=np.bool_),
-             "normal": np.zeros((ns, 3))}
+             "normal": np.zeros((ns, 3)), "queried_at": None, "terrain": None}
         g = GrooveArgs(poses=u.link_poses, vels=u.link_velocities, parent=self._parent, row=self._row,
                        axis_B=self._axis_B, length=self._length, pen=u.penetration, strength=float(p.wall_strength),
                        depth=float(p.thread_depth), v_eps=float(p.v_eps), normal=c["normal"], wrenches=y.wrenches,
                        travel=y.travel_speed,
-                       F=c["F"], vp=c["vp"], ax=c["axis"], d_twist=c["d_twist"], on=c["on"])
+                       F=y.wall_force, vp=c["vp"], ax=c["axis"], d_twist=c["d_twist"], on=c["on"])
         c["forces"], c["slopes"] = bind(groove_step, g), bind(groove_slope_step, g)
+        c["none"] = LinkWrenchJacobian(rows=self._row[:0], d_twist=c["d_twist"], d_pose=c["d_pose"],
+                                       inputs=("link_poses", "link_velocities"))
         return c
 
     def output(self, t, x, u, y):
@@ -113,16 +132,11 @@ class GrooveDrag(Component[GrooveDragParams]):
 
     def port_jacobian(self, port, t, x, u, y):
         """∂f/∂v_S of each screw pressing a groove wall (see the module docstring)."""
-        from snakesim.components.multibody.linearization import LinkWrenchJacobian
-
         if port != "wrenches" or u.cache is None:
             return None
         c = u.cache
-        c["slopes"]()
-        if not c["on"].any():                  # no screw past its thread: one empty declaration, kept
-            if "none" not in c:
-                c["none"] = LinkWrenchJacobian(rows=self._row[:0], d_twist=c["d_twist"], d_pose=c["d_pose"],
-                                               inputs=("link_poses", "link_velocities"))
+        if not y.wall_force.any():             # no screw past its thread: no slope (one empty declaration, kept)
             return c["none"]
+        c["slopes"]()
         return LinkWrenchJacobian(rows=self._row[c["on"]], d_twist=c["d_twist"], d_pose=c["d_pose"],
                                   inputs=("link_poses", "link_velocities"))

@@ -9,6 +9,9 @@ The table, its source (Schulson & Fortt 2012) and what of it is assumed: ice_fri
 contact's load-weighted slip speed per screw (``slip_speed``); T the ice temperature, a parameter (the
 terrain's) or the optional ``ice_temperature`` input (K; NaN or unconnected: the parameter).
 
+``apply: false`` leaves the contact's μ as it is (mu_scale = 1, mu = μ_material, nothing computed): a scene
+can wire the law in and switch it with a parameter (melt-dwell-climb's ``ice_friction``).
+
 in   slip_speed[n] m/s (contact.screw_slip_speed), ice_temperature[1] K (optional)
 out  mu[n] (the law's μ), mu_scale[n] = μ / μ_material     (feedthrough)
 """
@@ -42,6 +45,7 @@ class IceFrictionParams(Params):
     ice_temperature: float = Field(263.0, gt=0, description="K, T of the ice (input overrides when finite)")
     mu_material: float = Field(0.3, gt=0, description="μ of the contact's material, which mu_scale divides out")
     n: int = Field(1, ge=1, description="number of screws")
+    apply: bool = Field(True, description="false: mu_scale = 1 and mu = mu_material (the law switched off)")
 
 
 class IceFriction(Component[IceFrictionParams]):
@@ -53,6 +57,9 @@ class IceFriction(Component[IceFrictionParams]):
     mu_scale = Output(shape="n", unit="1", feedthrough=True)
 
     def output(self, t, x, u, y):
+        if not self.p.apply:
+            y.mu[:], y.mu_scale[:] = self.p.mu_material, 1.0
+            return
         T = float(u.ice_temperature[0])
         if not T == T:
             T = self.p.ice_temperature

@@ -18,6 +18,15 @@ coarse anchor set built from the abstract's statements, not a digitisation:
     middle and +0.04 at the ends (the "moderate" strengthening's size is assumed).
 The scatter the table is held to (``SCATTER``) is also an assumption (±0.05 in μk), not the paper's.
 Replace the rows with the paper's figure values when they are at hand; the law and its test read only this.
+
+A second search (issue 28's follow-up: Schulson & Fortt's figures; Kennedy, Schulson & Jones 2000; Maeno et
+al. 2003) found no data points either, only abstracts. One abstract gives numbers: ice-on-ice kinetic friction
+at 1e-4 to 1e-1 m/s and −1 to −27 °C (Seppyo, J. Japan. Soc. Snow Ice, 61 (6), abstract on J-STAGE,
+https://www.jstage.jst.go.jp/browse/seppyo/61/6/_contents/-char/en; the excerpt found names no authors):
+μk rises as the speed falls, "from 0.01 at 1e-1 m/s to 0.15 at 1e-4 m/s at −12 °C", lowest at −5 °C.
+``CHECK_POINTS`` holds its in-range point, an independent check of the table (test_ice_friction.py). Its
+fast point is outside the table: the law keeps the 1e-3 m/s value above 1e-3 m/s (0.156 at 261 K against the
+0.01 measured at 0.1 m/s), so faster slip, where frictional melting lubricates, is overestimated.
 """
 
 from __future__ import annotations
@@ -38,4 +47,6 @@ MU_K = np.array([
 ])
 #: ± in μk the law must reproduce the table's points within (assumed, see above)
 SCATTER = 0.05
+#: (T K, v m/s, μk, source) published points not used to build the table, within its range
+CHECK_POINTS = ((261.15, 1e-4, 0.15, "Seppyo 61 (6), J-STAGE abstract: -12 C, 1e-4 m/s"),)
 CITATION = "Schulson & Fortt, J. Geophys. Res. 117, B12204 (2012), abstract; table values assumed (see module)"

@@ -44,7 +44,7 @@ the robot; without one, ``screws`` identical screws of ``radius`` and ``length``
 in   heater_power[ns]  W (≥ 0; default 0)         slip_power[ns] W (contact.screw_slip_power; default 0)
      normal_force[ns]  N (contact.screw_normal_force; default 0: out of contact)
      slip_speed[ns]    m/s (contact.screw_slip_speed)   travel_speed[ns] m/s (groove_drag.travel_speed)
-     mu_base[ns]       1 (ice_friction.mu_scale; default 1)
+     mu_base[ns]       1 (ice_friction.mu_scale; default 1; sampled at the rate, held between samples)
 out  temperature[ns] K, penetration[ns] m, ev_scale[ns], mu_scale[ns], bond_time[ns] s, ledger[9] J
      (all from the discrete state: no feedthrough)
 uses robot: RobotModel (optional): the screws
@@ -60,8 +60,9 @@ from pydantic import Field
 from snakesim.components.multibody.robot_model import RobotModel
 from snakesim.framework import Component, Input, Output, Params, Uses
 
-from .bond import bond_mu_scale
-from .heat_step import LEDGER, constants, thermal_step
+from ..kernel_args import bind
+from .heat_kernels import HeatArgs, heat_outputs, heat_update
+from .heat_step import LEDGER, constants
 from .ice_properties import C_ICE, LATENT_FUSION, RHO_ICE, T_MELT, stefan_energy_density
 
 
@@ -151,51 +152,55 @@ class ScrewHeat(Component[ScrewHeatParams]):
         self._area_c = np.ascontiguousarray(area)
         self._g0 = np.ascontiguousarray(p.contact_conductance * area)
         n = self.ns
-        self.T, self.D, self.B = slice(0, n), slice(n, 2 * n), slice(2 * n, 3 * n)
-        self.L = slice(3 * n, 3 * n + len(LEDGER))
+        self.T, self.D, self.B, self.M = slice(0, n), slice(n, 2 * n), slice(2 * n, 3 * n), slice(3 * n, 4 * n)
+        self.L = slice(4 * n, 4 * n + len(LEDGER))
 
     def discrete_state(self):
-        x = np.zeros(3 * self.ns + len(LEDGER))
+        x = np.zeros(4 * self.ns + len(LEDGER))
         x[self.T] = self.p.initial_temperature
+        x[self.M] = 1.0                        # mu_base as sampled (1 until the first sample)
         return x
 
     def output(self, t, x, u, y):
-        p = self.p
-        T, delta, tb = x[self.T], x[self.D], x[self.B]
-        y.temperature[:] = T
-        y.penetration[:] = delta
-        y.ev_scale[:] = 1.0 + p.engagement_gain * np.minimum(delta / p.thread_depth, 1.0)
-        if tb.any():
-            y.mu_scale[:] = u.mu_base * bond_mu_scale(tb, u.normal_force, self.contact_area, p.mu_reference,
-                                                      p.bond_stress_1s, p.bond_exponent)
-        else:                                  # no bond anywhere (the common case): the base scale as it is
-            y.mu_scale[:] = u.mu_base
-        y.bond_time[:] = tb
-        y.ledger[:] = x[self.L]
+        c = u.cache
+        c.x[:] = x
+        c.outputs()                            # heat_kernels.heat_outputs: the module docstring's outputs
 
     def update(self, t, xd, u):
-        h = 1.0 / self.rate
-        if u.cache is not None:
-            u.cache.xd = xd
-        heat = np.asarray(u.heater_power, float)
-        bad = np.flatnonzero(~(heat >= 0.0) | ~np.isfinite(heat))
-        if bad.size:
-            raise ValueError(f"{self.name}: heater_power[{self.screw_names[bad[0]]}] = {float(heat[bad[0]])!r} W at "
-                             f"t = {t:g} s; valid: a finite power >= 0 (a heater does not cool)")
-        fn = np.asarray(u.normal_force, float)
-        slip = np.maximum(np.asarray(u.slip_power, float), 0.0)     # ≥ 0 by eq. 6; round-off below 0 dropped
-        delta = xd[self.D]
-        thermal_step(h, xd[self.T], delta, xd[self.B], xd[self.L], heat, slip, fn,
-                     np.asarray(u.travel_speed, float), np.asarray(u.slip_speed, float), self.k, self._area_s,
-                     self._area_c, self._g0)
-        deep = np.flatnonzero(delta > self.max_penetration)
-        if deep.size:
-            s = deep[0]
-            self.stop(f"{self.screw_names[s]} melted {1e3 * delta[s]:.1f} mm into the ice, past the "
-                      f"{1e3 * self.max_penetration[s]:.1f} mm limit (max_penetration; default the screw radius)")
+        c = u.cache
+        c.xd = xd
+        c.x[:] = xd
+        code = c.step()                        # heat_kernels.heat_update: heat_step.thermal_step on a copy
+        if code < 0:
+            s = -1 - code
+            heat = float(u.heater_power[s])
+            raise ValueError(f"{self.name}: heater_power[{self.screw_names[s]}] = {heat!r} W at t = {t:g} s; valid: "
+                             f"a finite power >= 0 (a heater does not cool)")
+        xd[:] = c.x
+        if code < self.ns:
+            self.stop(f"{self.screw_names[code]} melted {1e3 * xd[self.D][code]:.1f} mm into the ice, past the "
+                      f"{1e3 * self.max_penetration[code]:.1f} mm limit (max_penetration; default the screw radius)")
 
     def make_cache(self, x, u, y):
-        return SimpleNamespace(xd=None)        # the discrete state, kept by update() for the report
+        """The bound kernels over this run's buffers (heat_kernels.py); ``xd`` the discrete state, kept by
+        update() for the report. mu_base is held from the sample: the outputs declare no feedthrough, so
+        reading the input in output() would see whatever its source (ice_friction, evaluated after the
+        contact this feeds) last wrote."""
+        p = self.p
+        f64 = lambda a: np.ascontiguousarray(a, dtype=float)        # noqa: E731 - the constants
+        state = np.array(x, dtype=float)       # the kernels' copy of the state (a record's field is opaque)
+        args = HeatArgs(x=state, n=self.ns, h=1.0 / self.rate, nl=len(LEDGER),
+                        heater=u.heater_power, slip_power=u.slip_power, normal_force=u.normal_force,
+                        slip_speed=u.slip_speed, travel=u.travel_speed, mu_base=u.mu_base,
+                        temperature=y.temperature, penetration=y.penetration, ev_scale=y.ev_scale,
+                        mu_scale=y.mu_scale, bond_time=y.bond_time, ledger=y.ledger,
+                        k=self.k, area_s=self._area_s, area_c=self._area_c, g0=self._g0,
+                        max_pen=f64(self.max_penetration), slip_pos=np.zeros(self.ns),
+                        thread_depth=float(p.thread_depth), gain=float(p.engagement_gain),
+                        mu_ref=float(p.mu_reference), stress_1s=float(p.bond_stress_1s),
+                        exponent=float(p.bond_exponent))
+        return SimpleNamespace(xd=None, args=args, x=state, step=bind(heat_update, args),
+                               outputs=bind(heat_outputs, args))
 
     # -- the run's report (framework/run_reports.py) ---------------------------------------------
     def report(self, cache, summary: dict) -> dict:

@@ -83,3 +83,35 @@ def test_declared_velocity_slope_matches_finite_differences(with_normal):
             dv[j] += s * eps
             fd[:, j] += s * drag([0.019, 0.0, 0.0, 0.0], dv, normal=n).outputs()["wrenches"][row, :3] / (2 * eps)
     assert jac.d_twist[row, :3, :3] == pytest.approx(fd, rel=1e-5, abs=1e-3)
+
+
+class CurvedWall:
+    """A terrain stand-in whose normal at p is p's direction from the origin (a sphere's), counting queries."""
+
+    def __init__(self):
+        self.queries = 0
+
+    def query(self, points):
+        from types import SimpleNamespace
+        self.queries += 1
+        p = np.asarray(points, float)
+        return SimpleNamespace(normal=p / np.linalg.norm(p, axis=1, keepdims=True))
+
+
+def test_wall_normal_is_sampled_again_once_a_screw_has_moved_normal_distance():
+    h = drag([0.02, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0])
+    wall = CurvedWall()
+    h.inputs.terrain = wall
+    poses = np.zeros((ROBOT.nl, 7))
+    poses[:, 6], poses[:, 0] = 1.0, 1.0                  # every link 1 m out along x
+    h.inputs.link_poses = poses
+    h.update(0.0)
+    assert wall.queries == 1 and h.xd[:3] == pytest.approx([1.0, 0.0, 0.0])
+    poses[LAY.screw_row[0], 1] = 0.004                   # 4 mm along y: within 5 mm, the held normal stays
+    h.inputs.link_poses = poses
+    h.update(0.01)
+    assert wall.queries == 1 and h.xd[:3] == pytest.approx([1.0, 0.0, 0.0])
+    poses[LAY.screw_row[0], 1] = 0.006                   # 6 mm from where it was sampled: asked again
+    h.inputs.link_poses = poses
+    h.update(0.02)
+    assert wall.queries == 2 and h.xd[1] == pytest.approx(0.006 / np.hypot(1.0, 0.006))

@@ -8,13 +8,19 @@ import pytest
 
 from snakesim.components.thermal import IceFriction
 from snakesim.components.thermal.ice_friction import ice_mu
-from snakesim.components.thermal.ice_friction_data import MU_K, SCATTER, SPEEDS, TEMPERATURES
+from snakesim.components.thermal.ice_friction_data import CHECK_POINTS, MU_K, SCATTER, SPEEDS, TEMPERATURES
 from snakesim.framework import Harness
 
 
 def test_reproduces_every_table_point_within_the_scatter():
     T, v = np.meshgrid(TEMPERATURES, SPEEDS, indexing="ij")
     assert np.all(np.abs(ice_mu(T, v) - MU_K) <= SCATTER)
+
+
+@pytest.mark.parametrize("T, v, mu, source", CHECK_POINTS)
+def test_reproduces_an_independent_published_point_within_the_scatter(T, v, mu, source):
+    # not used to build the table (ice_friction_data.py): 0.197 from the table against 0.15 measured
+    assert abs(float(ice_mu(T, v)) - mu) <= SCATTER, source
 
 
 def test_stays_in_the_measured_range_everywhere():
@@ -46,3 +52,28 @@ def test_component_scales_the_material_mu():
     h.inputs.ice_temperature = [-1.0]
     with pytest.raises(ValueError, match="ice_temperature"):
         h.outputs()
+
+
+def test_apply_false_leaves_the_material_mu():
+    h = Harness(IceFriction, {"n": 2, "mu_material": 1.5, "apply": False})
+    h.inputs.slip_speed = [1e-5, 1e-3]
+    out = h.outputs()
+    assert (out["mu_scale"] == 1.0).all() and (out["mu"] == 1.5).all()
+
+
+@pytest.mark.slow
+def test_melt_scene_with_ice_friction_gives_the_contact_the_tables_mu():
+    """melt-dwell-climb --set ice_friction=true: the μ the contact sees, walls' μ × screw_mu_scale (heat.mu_scale,
+    which holds ice.mu_scale from its 100 Hz sample), is the table's at each screw's slip speed and the ice's
+    temperature (268.15 K, clipped to the table's 263 K), one sample later."""
+    from snakesim.framework.session import load_session
+
+    r = load_session("melt-dwell-climb", overrides=["ice_friction=true"],
+                     sim_overrides={"duration": 0.3, "record_rate": 100}).run()
+    mu_walls = 1.5
+    v, law, scale = r.log["contact.screw_slip_speed"], r.log["ice.mu"], r.log["heat.mu_scale"]
+    assert (r.log["heat.temperature"] > 273.15).all()          # heated: no refreeze bond on top of the law's μ
+    assert v.max() > 1e-3 and np.ptp(law) > 0.02               # the screws slip at speeds the table spans
+    assert law == pytest.approx(ice_mu(263.0, v), abs=1e-12)
+    assert mu_walls * scale[1:] == pytest.approx(law[:-1], abs=1e-12)
+    assert mu_walls * scale[0] == pytest.approx(mu_walls)      # before the first sample: the walls' μ
