@@ -16,6 +16,12 @@
 4. The whole schedule (45 s; --quick: the settle and the forward phase, 9 s) on snow and on hard ice: the
    distance made good (the tail's displacement) and its path length; the snow run's rut saved beside the
    results (soft_terrain.terrain.npz, components/terrain/deformable_files.py; soft_terrain.rut.png).
+5. A rigid wheel (r 0.3 m, b 0.15 m, 500 N) on dry sand (terrains/sand-field.yaml's soil; the textbook case,
+   components/terramechanics/wheel.py): at each slip the sinkage where the soil carries the load (bisection),
+   then the drawbar pull and the driving torque (tests/terramechanics/test_rigid_wheel.py checks the same
+   against Wong's integrals).
+6. Shape gaits on soil (soil_body_contact): mini-eels-sand-crawl and regolith-sidewinding at their own
+   settings (--quick: 5 s, else 20 s): the centre of mass's displacement, the rut and the real-time factor.
 
 Writes bench/results/soft_terrain.json and bench/results/soft_terrain.png (or the given files). --quick:
 fewer points and shorter runs (under a minute on 2 shared cores).
@@ -210,6 +216,42 @@ def traverse(quick: bool, json_path: Path) -> list[dict]:
     return rows
 
 
+# -- 5. a rigid wheel on dry sand ---------------------------------------------------------------------------
+def wheel(quick: bool) -> dict:
+    from snakesim.components.terrain.deformable import DeformableTerrain
+    from snakesim.components.terrain.spec import load_terrain
+    from snakesim.components.terramechanics.wheel import RigidWheel, wheel_forces
+
+    soil = load_terrain("sand-field").soil_spec
+    t = DeformableTerrain(0.0, (-1.0, -1.0), (2.0, 2.0), 0.005, soil, max_tiles=16)
+    w, load = RigidWheel(radius=0.3, width=0.15), 500.0
+    rows = []
+    for slip in np.linspace(0.0, 0.8, 5 if quick else 9):
+        lo, hi = 0.0, 0.25
+        for _ in range(50):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (lo, mid) if wheel_forces(t, w, (0.0, 0.0, w.radius - mid), 0.0, slip)["load"] > load else (mid, hi)
+        f = wheel_forces(t, w, (0.0, 0.0, w.radius - 0.5 * (lo + hi)), 0.0, slip)
+        rows.append({"slip": float(slip), "sinkage_m": 0.5 * (lo + hi), "drawbar_pull_N": f["drawbar_pull"],
+                     "torque_Nm": f["torque"]})
+    return {"radius_m": w.radius, "width_m": w.width, "load_N": load, "cell_m": 0.005, "rows": rows}
+
+
+# -- 6. shape gaits on soil ------------------------------------------------------------------------------------
+def shape_gaits(quick: bool) -> list[dict]:
+    rows = []
+    for scene in ("mini-eels-sand-crawl", "regolith-sidewinding"):
+        s = load_session(scene, sim_overrides={"duration": 5.0 if quick else 20.0})
+        r = s.run()
+        com = r["robot.com"]
+        rep = r.summary["reports"]["contact"]
+        rows.append({"scene": scene, "duration_s": r.summary["sim_time_s"], "outcome": r.summary["outcome"],
+                     "real_time_factor": r.summary["real_time_factor"],
+                     "com_displacement_m": float(np.hypot(*(com[-1, :2] - com[0, :2]))),
+                     "max_sinkage_m": rep["max_sinkage_m"], "rut": rep["rut"]})
+    return rows
+
+
 # -- report -------------------------------------------------------------------------------------------------
 def table(out: dict) -> str:
     d = out["drawbar"]
@@ -235,6 +277,15 @@ def table(out: dict) -> str:
             lines.append(f"   rut: {u['deformed_nodes']} nodes, deepest {100 * u['max_rut_depth_m']:.1f} cm, "
                          f"{1e3 * u['rut_volume_m3']:.1f} L; mean screw sinkage {100 * r['mean_sinkage_m']:.1f} cm; "
                          f"saved {r['terrain_npz']}, {r['rut_png']}")
+    wl = out["wheel"]
+    lines += [f"5. rigid wheel r {wl['radius_m']} m, b {wl['width_m']} m, {wl['load_N']:.0f} N on dry sand "
+              f"(cell {wl['cell_m']} m)", "   slip   sinkage cm   drawbar N   DP/W    torque N·m"]
+    lines += [f"   {r['slip']:4.2f}  {100 * r['sinkage_m']:9.2f}  {r['drawbar_pull_N']:10.1f}  "
+              f"{r['drawbar_pull_N'] / wl['load_N']:6.3f}  {r['torque_Nm']:9.1f}" for r in wl["rows"]]
+    lines += ["6. shape gaits on soil", "   scene                    s     CoM moved m   max sink cm   rut nodes   RTF   outcome"]
+    lines += [f"   {r['scene']:24s} {r['duration_s']:4.0f}  {r['com_displacement_m']:10.3f}  "
+              f"{100 * r['max_sinkage_m']:11.2f}  {r['rut']['deformed_nodes']:9d}  {r['real_time_factor']:5.1f}  "
+              f"{r['outcome']}" for r in out["shape_gaits"]]
     return "\n".join(lines)
 
 
@@ -282,7 +333,7 @@ def main(argv=None) -> int:
     t0 = time.perf_counter()
     a.json.parent.mkdir(parents=True, exist_ok=True)
     out = {"quick": a.quick, "drawbar": drawbar(a.quick), "speed": speeds(a.quick), "cost": cost(a.quick),
-           "traverse": traverse(a.quick, a.json)}
+           "traverse": traverse(a.quick, a.json), "wheel": wheel(a.quick), "shape_gaits": shape_gaits(a.quick)}
     out["bench_wall_s"] = time.perf_counter() - t0
     print(table(out))
     print(f"bench wall time {out['bench_wall_s']:.1f} s")

@@ -48,7 +48,7 @@ def builtin_components() -> tuple:
     from .ros2.terrain_map_attach import Ros2TerrainMap, Ros2TerrainMapMcap
     from .sensors.terrain_map_files import TerrainMapFiles
     from .thermal import THERMAL
-    from .terramechanics import TerramechanicsContact
+    from .terramechanics import TERRAMECHANICS
 
     return (Constant, Step, Sine, Gain, Sum, ZeroOrderHold, Pendulum, ViscousDamper, PointMass, SpringDamper,
             PointContact, HullContact, TerrainSource, Multibody, ScrewSdfContact, BodyContact, ScrewDrive,
@@ -56,7 +56,7 @@ def builtin_components() -> tuple:
             Imu, Odometry, TerrainMap, Tethers, WrenchSum, MobilityMonitor, VerticalMobilityEvaluation, TraverseEvaluation, TerrainClearance, JointLimits, BraceClimb, RerunSink, PlanarPose, ScrewSchedule, Ros2Publisher,
             Ros2Commands, Ros2SensorBridge, Ros2SimControl, Ros2McapRecorder, Ros2SensorMcap, Ros2TetherCommands,
             Ros2GaitCommands, Ros2BraceCommands, Ros2Odometry, Ros2OdometryMcap, Ros2TerrainMap, Ros2TerrainMapMcap,
-            TerrainMapFiles, TerramechanicsContact, *PLACEMENT, *PERCEPTION, *THERMAL)
+            TerrainMapFiles, *TERRAMECHANICS, *PLACEMENT, *PERCEPTION, *THERMAL)
 
 
 def __getattr__(name):

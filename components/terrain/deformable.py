@@ -7,6 +7,7 @@ the ruts a robot leaves.
     size: [20, 20]            # m, the patch (outside it: the base, rigid)
     cell: 0.02                # m, node spacing
     max_tiles: 2048           # tiles of 32 × 32 nodes that may be touched in a run (memory cap)
+    initial_state: null       # a run's soil_state.npz (relative to this file): start on its ruts
     soil: {k_c: 4.37e3, k_phi: 196.72e3, n: 1.6, cohesion: 1.03e3, friction_angle: 19.7,
            janosi_k: 0.025, elastic_k: 5.0e5, damping: 0.0}
 
@@ -77,6 +78,8 @@ class DeformableSpec(KindSpec):
     cell: float = Field(0.02, gt=0, description="m, node spacing")
     max_tiles: int = Field(2048, ge=1, description="tiles of 32 × 32 nodes a run may touch")
     soil: SoilSpec
+    initial_state: str | None = Field(None, description="soil_state.npz of an earlier run (terramechanics_contact's "
+                                                        "--out file; relative to the terrain file): start on its ruts")
 
     @model_validator(mode="after")
     def _stiffness_positive(self):
@@ -194,8 +197,25 @@ class DeformableTerrain(Terrain):
 
 
 def build_deformable(spec: DeformableSpec, context, **kw) -> DeformableTerrain:
-    return DeformableTerrain(spec.base_height, spec.origin, spec.size, spec.cell, spec.soil, spec.max_tiles,
-                             source=str(context.source), **kw)
+    terrain = DeformableTerrain(spec.base_height, spec.origin, spec.size, spec.cell, spec.soil, spec.max_tiles,
+                                source=str(context.source), **kw)
+    if spec.initial_state is not None:
+        import zipfile
+        from pathlib import Path
+
+        from snakesim.framework import ConfigError
+
+        from .deformable_files import load_state
+
+        path = Path(context.base_dir) / spec.initial_state      # an absolute path stays as it is
+        if not path.is_file():
+            raise ConfigError(f"initial_state: no file {path} (a soil_state.npz an earlier run's --out wrote)",
+                              str(context.source), "initial_state")
+        try:
+            load_state(terrain, path)
+        except (ValueError, KeyError, OSError, zipfile.BadZipFile) as e:
+            raise ConfigError(f"initial_state: {e}", str(context.source), "initial_state") from None
+    return terrain
 
 
 def deformable_kind():

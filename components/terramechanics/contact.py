@@ -40,9 +40,10 @@ Jacobian (``port_jacobian``, kernels.py docstring): per screw link the 6×6 bloc
 Report (``report``, summary.json's ``reports.<name>``): per screw the mean and deepest sinkage and the mean
 slip while driven, and the rut (terrain/deformable_files.py's ``rut_summary``).
 
-Not modelled: body links (only screws touch the soil), bulldozing and soil flow, lateral pressure on the
-rut walls, screws standing on an end, a screw outside the terrain's patch (the base there is rigid and not
-sampled: keep the run inside the patch), the transient build-up of j (the steady helix form above).
+Not modelled here: body links (soil_body_contact, body_contact.py, with ``exclude_screws: true``; a scene with
+both sums their wrenches with wrench_sum), bulldozing and soil flow, lateral pressure on the rut walls, screws
+standing on an end, a screw outside the terrain's patch (the base there is rigid and not sampled: keep the run
+inside the patch), the transient build-up of j (the steady helix form above).
 
 uses robot: RobotModel
 in   link_poses[nl,7], link_velocities[nl,6]   multibody's (world)
@@ -101,14 +102,24 @@ class ScrewGeometry:
         self.radius, self.length = np.asarray(layout.radius), np.asarray(layout.length)
 
 
-def check_cell(terrain: DeformableTerrain, radius: np.ndarray, length: np.ndarray, names) -> None:
-    """The terrain's cell must resolve every screw: no larger than its diameter and its length."""
+def check_cell(terrain: DeformableTerrain, radius: np.ndarray, length: np.ndarray, names, what: str = "screw") -> None:
+    """The terrain's cell must resolve every screw (or body cylinder): no larger than its diameter and length."""
     smallest = np.minimum(2.0 * radius, length)
     k = int(np.argmin(smallest))
     if terrain.cell > smallest[k]:
-        raise ConfigError(f"cell = {terrain.cell:g} m is larger than screw '{names[k]}' (diameter "
-                          f"{2 * radius[k]:g} m, length {length[k]:g} m): a screw must span several nodes; give "
+        raise ConfigError(f"cell = {terrain.cell:g} m is larger than {what} '{names[k]}' (diameter "
+                          f"{2 * radius[k]:g} m, length {length[k]:g} m): a {what} must span several nodes; give "
                           f"cell ≤ {smallest[k] / 4:g} m (a quarter of it) or less", terrain.source, "cell")
+
+
+def write_soil_files(terrain: DeformableTerrain, out_dir, name: str) -> list[str]:
+    """``--out``'s soil files: the state after the run (``soil_state.npz``; an ``initial_state`` of a later
+    run) and a top view of the rut (``rut.png``, when there is one)."""
+    from snakesim.components.terrain.deformable_files import rut_picture, save_state
+
+    written = [save_state(terrain, Path(out_dir) / "soil_state.npz").name]
+    picture = rut_picture(terrain, Path(out_dir) / "rut.png", title=f"{name}: rut after the run")
+    return written + ([picture.name] if picture is not None else [])
 
 
 class SoilEvaluation:
@@ -266,16 +277,12 @@ class TerramechanicsContact(Component[TerramechanicsContactParams]):
                 "rut": rut_summary(run.terrain)}
 
     def write_files(self, cache, out_dir):
-        """``--out``: the soil's state after the run (``soil_state.npz``, terrain/deformable_files.py's
-        ``load_state`` puts it back) and a top view of the rut (``rut.png``, when the robot left one)."""
+        """``--out``: the soil's state after the run (``soil_state.npz``, a later run's ``initial_state``) and a
+        top view of the rut (``rut.png``, when the robot left one)."""
         run = cache
         if run is None or run.terrain is None:
             return []
-        from snakesim.components.terrain.deformable_files import rut_picture, save_state
-
-        written = [save_state(run.terrain, Path(out_dir) / "soil_state.npz").name]
-        picture = rut_picture(run.terrain, Path(out_dir) / "rut.png", title=f"{self.name}: rut after the run")
-        return written + ([picture.name] if picture is not None else [])
+        return write_soil_files(run.terrain, out_dir, self.name)
 
     @staticmethod
     def format_report(rep):

@@ -91,6 +91,70 @@ def _band(coef, off, half):
 
 
 @njit(cache=True)
+def cylinder_nodes(grid, tile_of, plastic, yield_p, cx, cy, cz, a0, a1, a2, r, L, scratch):
+    """The nodes under a finite cylinder (centre c, unit axis a, radius r, length L) whose unloaded surface is
+    above its underside, into ``scratch`` rows (i, j, z_b, s_ax, u: the arc round the envelope from its
+    bottom, + towards a × e_down); (count, least and largest s_ax, deepest penetration below the surface).
+    Shared by the screws and the body links (body_kernels.py)."""
+    cell = grid[GCELL]
+    x0, y0, base = grid[GX0], grid[GY0], grid[GBASE]
+    nx, ny = int(grid[GNX]), int(grid[GNY])
+    # footprint box of the cylinder in x, y
+    ex = abs(a0) * 0.5 * L + r * math.sqrt(max(0.0, 1.0 - a0 * a0))
+    ey = abs(a1) * 0.5 * L + r * math.sqrt(max(0.0, 1.0 - a1 * a1))
+    i_lo = max(0, int(math.ceil((cx - ex - x0) / cell)))
+    i_hi = min(nx - 1, int(math.floor((cx + ex - x0) / cell)))
+    j_lo = max(0, int(math.ceil((cy - ey - y0) / cell)))
+    j_hi = min(ny - 1, int(math.floor((cy + ey - y0) / cell)))
+    # the screw frame on the ground: e_down ⟂ a, towards −z; e_side = a × e_down (the arc coordinate's +)
+    dn0, dn1, dn2 = a2 * a0, a2 * a1, a2 * a2 - 1.0
+    dl = math.sqrt(dn0 * dn0 + dn1 * dn1 + dn2 * dn2)
+    dn0, dn1, dn2 = dn0 / dl, dn1 / dl, dn2 / dl
+    sd0, sd1, sd2 = cross(a0, a1, a2, dn0, dn1, dn2)
+    # per row of nodes, only the j where the vertical line can meet the finite cylinder: its footprint
+    # lies in the strip |n̂_h·d| ≤ r about the projected axis (n̂_h horizontal, ⟂ the axis) and within
+    # |ĥ·d| ≤ (L/2)|a_h| + r|a_z| along it (ĥ the axis's horizontal direction); the box alone holds ~3×
+    # the nodes for a screw at 45° in yaw
+    ah = math.sqrt(a0 * a0 + a1 * a1)
+    h0, h1 = a0 / ah, a1 / ah
+    half_ax = 0.5 * L * ah + r * abs(a2) + 1e-9
+    m = 0
+    s_lo, s_hi, pen = 1e300, -1e300, 0.0
+    for i in range(i_lo, i_hi + 1):
+        x = x0 + i * cell
+        ddx = x - cx
+        lo1, hi1 = _band(h0, -h1 * ddx, r + 1e-9)             # n̂_h·d = −h1 dx + h0 dy
+        lo2, hi2 = _band(h1, h0 * ddx, half_ax)                 # ĥ·d = h0 dx + h1 dy
+        lo, hi = max(lo1, lo2), min(hi1, hi2)
+        if lo > hi:
+            continue
+        f_lo, f_hi = (cy + lo - y0) / cell, (cy + hi - y0) / cell      # clamped before int(): ±1e300
+        jj_lo = j_lo if f_lo <= j_lo else int(math.ceil(f_lo))
+        jj_hi = j_hi if f_hi >= j_hi else int(math.floor(f_hi))
+        for j in range(jj_lo, jj_hi + 1):
+            y = y0 + j * cell
+            zb, sax = cylinder_underside(cx, cy, cz, a0, a1, a2, r, x, y)
+            if not (zb == zb) or abs(sax) > 0.5 * L:
+                continue
+            s_p, s_y = node_state(tile_of, plastic, yield_p, i, j)
+            if zb >= base - s_p:
+                continue                     # above the (rutted) surface
+            if m >= scratch.shape[0]:
+                break
+            # outward radial unit n_c at the contact point; arc coordinate u = r·atan2(n·e_side, n·e_down)
+            n0 = (x - cx - sax * a0) / r
+            n1 = (y - cy - sax * a1) / r
+            n2 = (zb - cz - sax * a2) / r
+            u = r * math.atan2(n0 * sd0 + n1 * sd1 + n2 * sd2, n0 * dn0 + n1 * dn1 + n2 * dn2)
+            scratch[m, _I], scratch[m, _J], scratch[m, _ZB] = i, j, zb
+            scratch[m, _SAX], scratch[m, _U] = sax, u
+            s_lo, s_hi = min(s_lo, sax), max(s_hi, sax)
+            pen = max(pen, base - s_p - zb)
+            m += 1
+    return m, s_lo, s_hi, pen
+
+
+@njit(cache=True)
 def screw_soil(grid, soil, tile_of, plastic, yield_p, used, rows, geo, mount_R, mount_p, poses, vels, joint_v,
                helix_ratio, v_eps, commit, scratch, wrenches, per_screw, totals, jac, d_twist, d_pose, on_link):
     """Every screw against the soil (module docstring; the model: contact.py). Returns the number of
@@ -100,7 +164,6 @@ def screw_soil(grid, soil, tile_of, plastic, yield_p, used, rows, geo, mount_R, 
     cell = grid[GCELL]
     area = cell * cell
     x0, y0, base = grid[GX0], grid[GY0], grid[GBASE]
-    nx, ny = int(grid[GNX]), int(grid[GNY])
     c_coh, tan_phi, kj, damp = soil[SC], soil[STANPHI], soil[SKJ], soil[SDAMP]
     flows = 0
     D = np.zeros((3, 3))
@@ -136,58 +199,7 @@ def screw_soil(grid, soil, tile_of, plastic, yield_p, used, rows, geo, mount_R, 
             continue                             # standing on its end: not modelled
         if cz - r * math.sqrt(1.0 - a2 * a2) - 0.5 * L * abs(a2) > base:
             continue                             # wholly above the virgin surface (ruts only go down)
-        # footprint box of the cylinder in x, y
-        ex = abs(a0) * 0.5 * L + r * math.sqrt(max(0.0, 1.0 - a0 * a0))
-        ey = abs(a1) * 0.5 * L + r * math.sqrt(max(0.0, 1.0 - a1 * a1))
-        i_lo = max(0, int(math.ceil((cx - ex - x0) / cell)))
-        i_hi = min(nx - 1, int(math.floor((cx + ex - x0) / cell)))
-        j_lo = max(0, int(math.ceil((cy - ey - y0) / cell)))
-        j_hi = min(ny - 1, int(math.floor((cy + ey - y0) / cell)))
-        # the screw frame on the ground: e_down ⟂ a, towards −z; e_side = a × e_down (the arc coordinate's +)
-        dn0, dn1, dn2 = a2 * a0, a2 * a1, a2 * a2 - 1.0
-        dl = math.sqrt(dn0 * dn0 + dn1 * dn1 + dn2 * dn2)
-        dn0, dn1, dn2 = dn0 / dl, dn1 / dl, dn2 / dl
-        sd0, sd1, sd2 = cross(a0, a1, a2, dn0, dn1, dn2)
-        # per row of nodes, only the j where the vertical line can meet the finite cylinder: its footprint
-        # lies in the strip |n̂_h·d| ≤ r about the projected axis (n̂_h horizontal, ⟂ the axis) and within
-        # |ĥ·d| ≤ (L/2)|a_h| + r|a_z| along it (ĥ the axis's horizontal direction); the box alone holds ~3×
-        # the nodes for a screw at 45° in yaw
-        ah = math.sqrt(a0 * a0 + a1 * a1)
-        h0, h1 = a0 / ah, a1 / ah
-        half_ax = 0.5 * L * ah + r * abs(a2) + 1e-9
-        m = 0
-        s_lo, s_hi, pen = 1e300, -1e300, 0.0
-        for i in range(i_lo, i_hi + 1):
-            x = x0 + i * cell
-            ddx = x - cx
-            lo1, hi1 = _band(h0, -h1 * ddx, r + 1e-9)             # n̂_h·d = −h1 dx + h0 dy
-            lo2, hi2 = _band(h1, h0 * ddx, half_ax)                 # ĥ·d = h0 dx + h1 dy
-            lo, hi = max(lo1, lo2), min(hi1, hi2)
-            if lo > hi:
-                continue
-            f_lo, f_hi = (cy + lo - y0) / cell, (cy + hi - y0) / cell      # clamped before int(): ±1e300
-            jj_lo = j_lo if f_lo <= j_lo else int(math.ceil(f_lo))
-            jj_hi = j_hi if f_hi >= j_hi else int(math.floor(f_hi))
-            for j in range(jj_lo, jj_hi + 1):
-                y = y0 + j * cell
-                zb, sax = cylinder_underside(cx, cy, cz, a0, a1, a2, r, x, y)
-                if not (zb == zb) or abs(sax) > 0.5 * L:
-                    continue
-                s_p, s_y = node_state(tile_of, plastic, yield_p, i, j)
-                if zb >= base - s_p:
-                    continue                     # above the (rutted) surface
-                if m >= scratch.shape[0]:
-                    break
-                # outward radial unit n_c at the contact point; arc coordinate u = r·atan2(n·e_side, n·e_down)
-                n0 = (x - cx - sax * a0) / r
-                n1 = (y - cy - sax * a1) / r
-                n2 = (zb - cz - sax * a2) / r
-                u = r * math.atan2(n0 * sd0 + n1 * sd1 + n2 * sd2, n0 * dn0 + n1 * dn1 + n2 * dn2)
-                scratch[m, _I], scratch[m, _J], scratch[m, _ZB] = i, j, zb
-                scratch[m, _SAX], scratch[m, _U] = sax, u
-                s_lo, s_hi = min(s_lo, sax), max(s_hi, sax)
-                pen = max(pen, base - s_p - zb)
-                m += 1
+        m, s_lo, s_hi, pen = cylinder_nodes(grid, tile_of, plastic, yield_p, cx, cy, cz, a0, a1, a2, r, L, scratch)
         if m == 0:
             continue
         # the patch: a cylinder pressed ``pen`` into the surface meets it over the chord 2√(2 r pen − pen²)

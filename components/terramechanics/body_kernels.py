@@ -1,0 +1,165 @@
+"""Body-link–soil kernel of the soil body contact (body_contact.py has the model; this file the loop).
+
+One call evaluates every cylinder piece of the selected links against the deformable terrain's nodes,
+with the screws' node search (kernels.cylinder_nodes) and the soil law (terrain/deformable_kernels.py);
+with ``commit`` it writes the step's plastic sinkage into the terrain state. Per piece k:
+
+    piece_link[k]   link row                               int64
+    piece_geo[k]    (radius, length, along, across)        float64 (along/across: the shear's factors)
+    piece_R[k]      (3, 3) the cylinder's frame in the link (column 2 its axis); piece_p[k] (3,) its centre
+
+Outputs: ``wrenches`` (nl, 6) [f, τ about the link origin], world, added to; ``per_link`` (nl, 3): normal
+force N, deepest sinkage m, contact nodes; ``totals`` [ΣF_n, contacts].
+
+With ``jac`` the same pass fills the per-link 6×6 blocks a linearly implicit integrator reads (as the
+screws', kernels.py): per node the shear f = −τ A P u / ρ (P = across I + (along − across) ĥĥᵀ on the
+horizontal slip u, ρ = √(|u|² + v_ε²)) has ∂f/∂u = −τ A (P / ρ − (P u) uᵀ / ρ³) (finite at rest: τ A P / v_ε,
+the slope that sets an explicit step), the damping −R A ẑẑᵀ while loaded; the height derivative is the
+pressure's, −σ'(s) (A ẑ + f tan φ / τ_max), σ' = K_e (elastic) or n σ / s (Bekker's). Both moved to the link
+origin as X_cᵀ D X_c. Left out: b, j and the contact set following the pose (lower order).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from snakesim.components.contact.jacobian_kernels import add_lever_quadratic, add_lever_rank1
+
+from snakesim.components.terrain.deformable_kernels import (GBASE, GCELL, GX0, GY0, SC, SDAMP, SKE, SKJ, SN,
+                                                           STANPHI, commit_node, node_state, pressure)
+
+from .kernels import _I, _J, _ZB, cross, cylinder_nodes, quat_rotate
+
+# per-link output columns
+L_NORMAL, L_SINKAGE, L_NODES = range(3)
+
+
+@njit(cache=True)
+def body_soil(grid, soil, tile_of, plastic, yield_p, used, piece_link, piece_geo, piece_R, piece_p, poses, vels,
+              v_eps, commit, scratch, wrenches, per_link, totals, jac, d_twist, d_pose, on_link):
+    """Every piece against the soil (module docstring; the model: body_contact.py). Returns the nodes a commit
+    made flow (0 without ``commit``), −1 when the terrain's tile pool is full. With ``jac``: the links' blocks
+    into ``d_twist``, ``d_pose`` (nl, 6, 6), those with one marked in ``on_link`` (cleared first)."""
+    cell = grid[GCELL]
+    area = cell * cell
+    x0, y0, base = grid[GX0], grid[GY0], grid[GBASE]
+    c_coh, tan_phi, kj, damp = soil[SC], soil[STANPHI], soil[SKJ], soil[SDAMP]
+    flows = 0
+    D = np.zeros((3, 3))
+    rc, gk, mk = np.zeros(3), np.zeros(3), np.zeros(3)
+    if jac:
+        for k in range(on_link.size):
+            if on_link[k]:
+                d_twist[k, :, :] = 0.0
+                d_pose[k, :, :] = 0.0
+                on_link[k] = False
+    totals[0] = 0.0
+    totals[1] = 0.0
+    for k in range(per_link.shape[0]):
+        for c in range(per_link.shape[1]):
+            per_link[k, c] = 0.0
+    for k in range(piece_link.shape[0]):
+        row = piece_link[k]
+        r, L, along, across = piece_geo[k, 0], piece_geo[k, 1], piece_geo[k, 2], piece_geo[k, 3]
+        q = poses[row, 3:7]
+        a0, a1, a2 = quat_rotate(q, piece_R[k, 0, 2], piece_R[k, 1, 2], piece_R[k, 2, 2])
+        m0, m1, m2 = quat_rotate(q, piece_p[k, 0], piece_p[k, 1], piece_p[k, 2])
+        px, py, pz = poses[row, 0], poses[row, 1], poses[row, 2]
+        cx, cy, cz = px + m0, py + m1, pz + m2
+        if abs(a2) > 0.98:
+            continue                             # standing on its end: not modelled
+        if cz - r * math.sqrt(1.0 - a2 * a2) - 0.5 * L * abs(a2) > base:
+            continue                             # wholly above the virgin surface
+        m, s_lo, s_hi, pen = cylinder_nodes(grid, tile_of, plastic, yield_p, cx, cy, cz, a0, a1, a2, r, L, scratch)
+        if m == 0:
+            continue
+        # Bekker's b: the smaller of the chord of the deepest penetration and the axial extent (as the screws)
+        pc = min(pen, r)
+        chord = 2.0 * math.sqrt(max(0.0, 2.0 * r * pc - pc * pc))
+        b = max(cell, min(chord, s_hi - s_lo + cell))
+        vx, vy, vz = vels[row, 0], vels[row, 1], vels[row, 2]
+        wx, wy, wz = vels[row, 3], vels[row, 4], vels[row, 5]
+        # the sliding direction: the piece centre's horizontal velocity; j runs from the patch's upstream edge
+        wc0, wc1, _ = cross(wx, wy, wz, m0, m1, m2)
+        sx, sy = vx + wc0, vy + wc1
+        sn = math.sqrt(sx * sx + sy * sy)
+        sx, sy = (sx / sn, sy / sn) if sn > 1e-12 else (0.0, 0.0)
+        lead = 1e300
+        for n in range(m):
+            lead = min(lead, (x0 + scratch[n, _I] * cell) * sx + (y0 + scratch[n, _J] * cell) * sy)
+        # the axis's horizontal direction (the skin's along; across is its normal in the plane)
+        ah = math.sqrt(a0 * a0 + a1 * a1)
+        h0, h1 = a0 / ah, a1 / ah
+        fx = fy = fz = tx = ty = tz = 0.0
+        deepest = 0.0
+        for n in range(m):
+            i, j = int(scratch[n, _I]), int(scratch[n, _J])
+            zb = scratch[n, _ZB]
+            X, Y = x0 + i * cell, y0 + j * cell
+            sink = base - zb
+            deepest = max(deepest, sink)
+            s_p, s_y = node_state(tile_of, plastic, yield_p, i, j)
+            sigma = pressure(soil, b, sink, s_p, s_y)[0]
+            rx, ry, rz = X - px, Y - py, zb - pz
+            w0, w1, w2 = cross(wx, wy, wz, rx, ry, rz)
+            u0, u1, u2 = vx + w0, vy + w1, vz + w2           # the link's material point (the soil at rest)
+            sig = max(0.0, sigma - damp * u2)
+            fn = sig * area
+            # Janosi–Hanamoto along the sliding direction, the soil sheared since the patch's upstream edge
+            ell = X * sx + Y * sy - lead + 0.5 * cell
+            tau_max = c_coh + sigma * tan_phi
+            tau = tau_max * (1.0 - math.exp(-ell / kj)) * area
+            rh = math.sqrt(u0 * u0 + u1 * u1 + v_eps * v_eps)
+            ua = u0 * h0 + u1 * h1                             # along the link's axis, and across it
+            pu0 = along * ua * h0 + across * (u0 - ua * h0)    # P u
+            pu1 = along * ua * h1 + across * (u1 - ua * h1)
+            f0 = -tau * pu0 / rh
+            f1 = -tau * pu1 / rh
+            f2 = fn
+            fx += f0
+            fy += f1
+            fz += f2
+            c0, c1, c2 = cross(rx, ry, rz, f0, f1, f2)
+            tx += c0
+            ty += c1
+            tz += c2
+            if jac:
+                g = tau / rh
+                g3 = tau / (rh * rh * rh)
+                dp = along - across
+                D[0, 0] = -g * (across + dp * h0 * h0) + g3 * pu0 * u0
+                D[0, 1] = -g * dp * h0 * h1 + g3 * pu0 * u1
+                D[1, 0] = -g * dp * h1 * h0 + g3 * pu1 * u0
+                D[1, 1] = -g * (across + dp * h1 * h1) + g3 * pu1 * u1
+                D[0, 2] = D[1, 2] = D[2, 0] = D[2, 1] = 0.0
+                D[2, 2] = -damp * area if sig > 0.0 else 0.0
+                rc[0], rc[1], rc[2] = rx, ry, rz
+                add_lever_quadratic(rc, D, d_twist[row])
+                if sig > 0.0 and sink > s_p:
+                    # σ' on the branch pressure() took: elastic (K_e (s − s_p)) or Bekker's (n σ / s)
+                    dsig = soil[SKE] if sigma == soil[SKE] * (sink - s_p) else soil[SN] * sigma / sink
+                    k_sh = tan_phi / tau_max
+                    gk[0], gk[1], gk[2] = f0 * k_sh, f1 * k_sh, area
+                    mk[2] = -dsig
+                    add_lever_rank1(rc, gk, mk, d_pose[row])
+                on_link[row] = True
+            if commit:
+                f = commit_node(grid, soil, tile_of, plastic, yield_p, used, i, j, sink, b)
+                if f < 0:
+                    return -1
+                flows += f
+        wrenches[row, 0] += fx
+        wrenches[row, 1] += fy
+        wrenches[row, 2] += fz
+        wrenches[row, 3] += tx
+        wrenches[row, 4] += ty
+        wrenches[row, 5] += tz
+        per_link[row, L_NORMAL] += fz
+        per_link[row, L_SINKAGE] = max(per_link[row, L_SINKAGE], deepest)
+        per_link[row, L_NODES] += m
+        totals[0] += fz
+        totals[1] += m
+    return flows
