@@ -11,22 +11,14 @@ import shlex
 
 import click
 
-
-def _floats(text: str, n: int, option: str, meaning: str):
-    try:
-        v = [float(a) for a in text.split(",")]
-    except ValueError:
-        v = []
-    if len(v) != n:
-        raise click.BadParameter(f"'{text}': expected {meaning}", param_hint=option)
-    return v
+from snakesim.framework.cli_numbers import comma_floats
 
 
 def _outliers(text: str):
     """(k, std), or None for 'none' (no outlier removal)."""
     if text.strip().lower() == "none":
         return None
-    k, std = _floats(text, 2, "--outliers", "K,STD (neighbours, standard deviations) or 'none'")
+    k, std = comma_floats(text, 2, "--outliers", "K,STD (neighbours, standard deviations) or 'none'")
     if k < 1 or k != int(k) or not std > 0:
         raise click.BadParameter(f"'{text}': K is a whole number >= 1 and STD > 0", param_hint="--outliers")
     return int(k), std
@@ -35,7 +27,7 @@ def _outliers(text: str):
 def _offset(text: str):
     if text.strip().lower() == "none":
         return "none"
-    return _floats(text, 3, "--offset", "X,Y,Z (file units) or 'none'")
+    return comma_floats(text, 3, "--offset", "X,Y,Z (file units) or 'none'")
 
 
 @click.command(name="import")

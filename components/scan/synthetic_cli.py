@@ -11,19 +11,9 @@ from __future__ import annotations
 
 import click
 
+from snakesim.framework.cli_numbers import comma_floats
+
 from .scan_files import SCAN_SUFFIXES
-
-
-def _numbers(text: str | None, count: int, option: str, what: str):
-    if text is None:
-        return None
-    try:
-        v = [float(a) for a in text.split(",")]
-    except ValueError:
-        v = []
-    if len(v) != count:
-        raise click.BadParameter(f"'{text}': expected {count} numbers {what}", param_hint=option)
-    return tuple(v)
 
 
 @click.command(name="scan")
@@ -87,16 +77,17 @@ def scan_command(terrain_name, output, poses, top, bottom, rope, pattern, channe
     if top < bottom:
         raise click.BadParameter(f"--top {top:g} m is below --bottom {bottom:g} m: the rope is lowered from top "
                                  "to bottom (top >= bottom)", param_hint="--top/--bottom")
-    lo, hi = _numbers(vfov, 2, "--vfov", "LO,HI (deg)")
+    lo, hi = comma_floats(vfov, 2, "--vfov", "2 numbers LO,HI (deg)")
     if not -90 <= lo <= hi <= 90:
         raise click.BadParameter(f"'{vfov}': need -90 <= LO <= HI <= 90 deg", param_hint="--vfov")
-    spheres = tuple(_numbers(m, 4, "--mask", "X,Y,Z,R (m)") for m in masks)
+    spheres = tuple(comma_floats(m, 4, "--mask", "4 numbers X,Y,Z,R (m)") for m in masks)
     for m in spheres:
         if not m[3] > 0:
             raise click.BadParameter(f"'{','.join(f'{v:g}' for v in m)}': the radius R must be > 0 m",
                                      param_hint="--mask")
     head = ScanPattern(channels, columns, (lo, hi), TILTED if pattern == "tilted" else (0.0,))
-    settings = ScanSettings(top=top, bottom=bottom, poses=poses, rope=_numbers(rope, 2, "--rope", "X,Y (m)"),
+    xy = comma_floats(rope, 2, "--rope", "2 numbers X,Y (m)")
+    settings = ScanSettings(top=top, bottom=bottom, poses=poses, rope=xy,
                             pattern=head, min_range=min_range, max_range=max_range, range_noise=range_noise,
                             range_noise_slope=range_noise_slope, dropout=dropout, grazing=grazing, masks=spheres,
                             thin=thin, seed=seed)

@@ -11,18 +11,14 @@ from __future__ import annotations
 
 import click
 
+from snakesim.framework.cli_numbers import comma_floats
+
 
 def _bounds(text: str | None):
     if text is None:
         return None
-    try:
-        v = [float(a) for a in text.split(",")]
-    except ValueError:
-        v = []
-    if len(v) != 6:
-        raise click.BadParameter(f"'{text}': expected six numbers XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX (m)",
-                                 param_hint="--bounds")
-    return v[:3], v[3:]
+    v = comma_floats(text, 6, "--bounds", "six numbers XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX (m)")
+    return list(v[:3]), list(v[3:])
 
 
 @click.group(name="terrain")
