@@ -16,7 +16,9 @@ Also the thermal side's cost as a fraction of the scene's step (target <= 10 %):
 the thermal components taken out (thermal_cost: alternating runs in one process, medians per integrator step
 and per run); --cost runs only that and writes bench/results/melt_cost.json.
 
-Grids: full = set-points 10, 20, 30, 40 °C × ice −5, −180 °C, TOL 1 s; --quick = 10 and 40 °C, TOL 4 s.
+Grids: full = set-points 10, 20, 30, 40 °C × ice −5, −180 °C, TOL 1 s; --quick = 10 and 40 °C, TOL 4 s;
+--set-points / --tolerance choose others (the cost is then measured only with --cost); --ice NAME,... some of the
+ices; --scene another variant (melt-dwell-climb-ice-friction: ice on ice's friction, the brace pre-loaded).
 Writes bench/results/melt_dwell.json and bench/results/melt_dwell.png (or the given files).
 """
 
@@ -37,9 +39,9 @@ MAX_DWELL = 320.0
 RESULTS = Path(__file__).with_name("results")
 
 
-def run_once(dwell: float, set_point_c: float, ice: dict) -> dict:
+def run_once(dwell: float, set_point_c: float, ice: dict, scene: str = SCENE) -> dict:
     sets = {"dwell": dwell, "set_point": set_point_c + 273.15, **ice}
-    r = load_session(SCENE, overrides=[f"{k}={v}" for k, v in sets.items()]).run()
+    r = load_session(scene, overrides=[f"{k}={v}" for k, v in sets.items()]).run()
     s = r.summary
     heat, watch = s["reports"].get("heat", {}), s["reports"].get("watch", {})
     return {"dwell_s": dwell, "outcome": s["outcome"], "failure_kind": s["failure_kind"],
@@ -49,15 +51,15 @@ def run_once(dwell: float, set_point_c: float, ice: dict) -> dict:
             "screw_temperature_C": [v["temperature_C"] for v in heat.get("screws", {}).values()]}
 
 
-def critical_dwell(set_point_c: float, ice: dict, tol: float) -> dict:
+def critical_dwell(set_point_c: float, ice: dict, tol: float, scene: str = SCENE) -> dict:
     runs = []
     lo, hi = 2.0, 40.0
-    first = run_once(lo, set_point_c, ice)
+    first = run_once(lo, set_point_c, ice, scene)
     runs.append(first)
     if first["outcome"] != "success":
         return {"critical_dwell_s": None, "note": f"fails already at {lo:g} s", "runs": runs}
     while True:
-        r = run_once(hi, set_point_c, ice)
+        r = run_once(hi, set_point_c, ice, scene)
         runs.append(r)
         if r["outcome"] != "success":
             break
@@ -66,7 +68,7 @@ def critical_dwell(set_point_c: float, ice: dict, tol: float) -> dict:
             return {"critical_dwell_s": None, "note": f"climbs after every dwell up to {lo:g} s", "runs": runs}
     while hi - lo > tol:
         mid = 0.5 * (lo + hi)
-        r = run_once(mid, set_point_c, ice)
+        r = run_once(mid, set_point_c, ice, scene)
         runs.append(r)
         lo, hi = (mid, hi) if r["outcome"] == "success" else (lo, mid)
     return {"critical_dwell_s": 0.5 * (lo + hi), "bracket_s": [lo, hi], "runs": runs}
@@ -193,27 +195,43 @@ def plot(table: list[dict], path: Path) -> None:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="10 and 40 °C only, 4 s bisection tolerance")
+    ap.add_argument("--set-points", default=None, metavar="C,C,...",
+                    help="heater set-points, °C (replaces the grid's; e.g. 20,30 to add to a --quick table)")
+    ap.add_argument("--tolerance", type=float, default=None, metavar="S", help="bisection tolerance, s")
+    ap.add_argument("--scene", default=SCENE, help="the scene variant (melt-dwell-climb-ice-friction: ice on ice's "
+                    "friction, a pre-loaded brace); the cost is then measured only with --cost")
+    ap.add_argument("--ice", default=None, metavar="NAME,...", help=f"ices of the grid, by name ({', '.join(ICE)}); "
+                    "default all")
     ap.add_argument("--cost", action="store_true", help="only the thermal side's cost (writes --cost-json)")
     ap.add_argument("--repeats", type=int, default=5, help="alternating on/off runs for the cost")
     ap.add_argument("--cost-json", type=Path, default=RESULTS / "melt_cost.json")
     ap.add_argument("--json", type=Path, default=RESULTS / "melt_dwell.json")
     ap.add_argument("--png", type=Path, default=RESULTS / "melt_dwell.png")
     a = ap.parse_args(argv)
-    cost = thermal_cost(repeats=a.repeats)
-    print_cost(cost)
+    if a.ice is not None and not set(a.ice.split(",")) <= set(ICE):
+        ap.error(f"--ice {a.ice!r}: valid names are {', '.join(ICE)}")
+    ices = {k: v for k, v in ICE.items() if a.ice is None or k in a.ice.split(",")}
+    cost = (thermal_cost(repeats=a.repeats) if a.cost or (a.set_points is None and a.scene == SCENE)
+            else None)
+    if cost is not None:
+        print_cost(cost)
     if a.cost:
         a.cost_json.parent.mkdir(parents=True, exist_ok=True)
         a.cost_json.write_text(json.dumps(cost, indent=2) + "\n")
         print(f"wrote {a.cost_json}")
         return 0
-    out = {"scene": SCENE, "thermal_cost": cost}
+    out = {"scene": a.scene, "thermal_cost": cost}
     set_points, tol = ((10.0, 40.0), 4.0) if a.quick else ((10.0, 20.0, 30.0, 40.0), 1.0)
+    if a.set_points is not None:
+        set_points = tuple(float(c) for c in a.set_points.split(","))
+    if a.tolerance is not None:
+        tol = a.tolerance
     table, t0 = [], time.perf_counter()
     print(f"{'ice':>18} {'set-point':>10} {'critical dwell':>16} {'runs':>5} {'wall':>7}  failures named")
-    for ice, sets in ICE.items():
+    for ice, sets in ices.items():
         for sp in set_points:
             w0 = time.perf_counter()
-            r = critical_dwell(sp, sets, tol)
+            r = critical_dwell(sp, sets, tol, a.scene)
             row = {"ice": ice, "set_point_C": sp, **r, "wall_s": time.perf_counter() - w0}
             table.append(row)
             cd = (f"{r['critical_dwell_s']:.1f} ± {0.5 * (r['bracket_s'][1] - r['bracket_s'][0]):.1f} s"
