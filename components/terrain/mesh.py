@@ -261,13 +261,13 @@ def _near_surface(path, data: bytes, params: dict, mesh, values, lo, h: float, b
     key = _store.content_key(data, {**params, "exact_band": band, "index": INDEX_VERSION})
     entry = _store.load_entry(key, store)
     if entry is None:
-        start, tris = cell_lists(V, F, lo, h, np.array(values.shape) - 1, near_radius(h, band), str(path))
+        start, tris, zeta = cell_lists(V, F, lo, h, np.array(values.shape) - 1, near_radius(h, band), str(path))
         o = 1.0
         if sign == "winding_number":
             from .mesh_winding import orientation
 
             o = orientation(V, F, values, lo, h)
-        _store.save_entry(key, {"start": start, "tris": tris, "orientation": np.array(o)}, store)
+        _store.save_entry(key, {"start": start, "tris": tris, "zeta": zeta, "orientation": np.array(o)}, store)
     else:
-        start, tris, o = entry["start"], entry["tris"], float(entry["orientation"])
-    return NearSurface(V, F, lo, h, values.shape, band, o * flip, (start, tris))
+        start, tris, zeta, o = entry["start"], entry["tris"], entry["zeta"], float(entry["orientation"])
+    return NearSurface(V, F, lo, h, values.shape, band, o * flip, (start, tris, zeta))
