@@ -71,6 +71,11 @@ def cloud_points(msg: PointCloud2) -> np.ndarray:
     return xyz[np.isfinite(xyz).all(axis=1)]
 
 
+def stamp_key(stamp) -> int:
+    """A message stamp as whole microseconds: the key that pairs a cloud with the /tf of its instant."""
+    return int(round(stamp.seconds() * 1e6))
+
+
 class AutonomyNode:
     """One ROS 2 participant: the readers and the writer above, the map, the plan and the follower's state."""
 
@@ -86,7 +91,11 @@ class AutonomyNode:
         self.clock = DataReader(dp, Topic(dp, "rt/clock", Clock), QOS_CLOCK)
         self.command = DataWriter(dp, Topic(dp, "rt/joint_command", JointState), QOS_DEFAULT)
         self.map = CostMap(CostMapParams(inflate=args.inflate))
-        self.links: dict[str, tuple[np.ndarray, np.ndarray]] = {}     # link -> (R, p) in world
+        self.links: dict[str, tuple[np.ndarray, np.ndarray]] = {}     # link -> (R, p) in world, latest
+        # the links at each recent /tf stamp (µs): a cloud is placed with the poses of its own stamp, never
+        # with whatever /tf arrived last (under load the two drift apart by a tick or more)
+        self.links_at: dict[int, dict[str, tuple[np.ndarray, np.ndarray]]] = {}
+        self.pending: list = []                # clouds whose stamp's /tf has not arrived yet
         self.static: dict[str, tuple[str, np.ndarray, np.ndarray]] = {}   # frame -> (parent, R, p)
         self.head = None
         self.path = None
@@ -109,33 +118,46 @@ class AutonomyNode:
             if isinstance(msg, TFMessage):
                 for ts in msg.transforms:
                     self.links[ts.child_frame_id] = transform(ts.transform)
+                    at = self.links_at.setdefault(stamp_key(ts.header.stamp), {})
+                    at[ts.child_frame_id] = self.links[ts.child_frame_id]
+        while len(self.links_at) > 200:
+            del self.links_at[min(self.links_at)]
         for msg in self.odom.take(N=100):
             if isinstance(msg, Odometry):
                 p = msg.pose.pose.position
                 self.head = np.array([p.x, p.y, p.z])
 
-    def frame_in_world(self, frame: str):
-        """(R, p) of a frame: a moving link from /tf, or a fixed frame on one (/tf_static)."""
-        if frame in self.links:
-            return self.links[frame]
+    def frame_in_world(self, frame: str, links=None):
+        """(R, p) of a frame: a moving link from /tf (``links``: those of one stamp; default the latest), or a
+        fixed frame on one (/tf_static)."""
+        links = self.links if links is None else links
+        if frame in links:
+            return links[frame]
         if frame in self.static:
             parent, r, p = self.static[frame]
-            up = self.frame_in_world(parent)
+            up = self.frame_in_world(parent, links)
             if up is not None:
                 return up[0] @ r, up[0] @ p + up[1]
         return None
 
     def take_clouds(self) -> None:
-        for msg in self.points.take(N=10):
-            if not isinstance(msg, PointCloud2):
-                continue
-            pose = self.frame_in_world(msg.header.frame_id)
+        clouds = self.pending + [m for m in self.points.take(N=10) if isinstance(m, PointCloud2)]
+        self.pending = []
+        newest = max(self.links_at) if self.links_at else None
+        for msg in clouds:
+            key = stamp_key(msg.header.stamp)
+            links = self.links_at.get(key)
+            if links is None:
+                if newest is None or key > newest:
+                    self.pending.append(msg)      # its /tf is still on the way
+                continue                          # older than the /tf kept: dropped
+            pose = self.frame_in_world(msg.header.frame_id, links)
             if pose is None or self.head is None:
                 continue
             local = cloud_points(msg)
             local = local[np.hypot(local[:, 0], local[:, 1]) < self.args.max_range]
             world = local @ pose[0].T + pose[1]
-            body = cKDTree(np.array([p for _, p in self.links.values()]))
+            body = cKDTree(np.array([p for _, p in links.values()]))
             near, _ = body.query(world, distance_upper_bound=self.args.self_radius)
             self.map.add(world[np.isinf(near)])          # inf: no link within self_radius
             self.scans += 1
