@@ -12,7 +12,8 @@
    surface-screw-traverse (hard ice, terrains/flat-ice.yaml, screw_sdf_contact), each at its own sim
    settings; the tail's mean speed along the crescent's chord (+x) over the phase's last half.
 3. Cost per step against the snow grid's cell: snow-screw-traverse for a few seconds with the snow field's
-   cell set to each value (its own settings: rosenbrock_w, 20 ms); wall time per step and real-time factor.
+   cell set to each value (its own settings: rosenbrock_w, 20 ms); wall time per step and real-time factor;
+   and the same snow on a DEM base (terrains/snow-dem.yaml, 2 cm: the law along the ground's normal).
 4. The whole schedule (45 s; --quick: the settle and the forward phase, 9 s) on snow and on hard ice: the
    distance made good (the tail's displacement) and its path length; the snow run's rut saved beside the
    results (soft_terrain.terrain.npz, components/terrain/deformable_files.py; soft_terrain.rut.png).
@@ -67,7 +68,7 @@ class PairRig:
     def __init__(self, geo, cell=0.01):
         from snakesim.components.terrain.deformable import DeformableTerrain
         from snakesim.components.terrain.spec import load_terrain
-        from snakesim.components.terramechanics.kernels import scratch_rows
+        from snakesim.components.terramechanics.kernels import SCRATCH_COLUMNS, scratch_rows
 
         spec = load_terrain("snow-field").soil_spec
         self.terrain = DeformableTerrain(0.0, (-1.0, -1.0), (2.0, 2.0), cell, spec, max_tiles=16)
@@ -76,7 +77,7 @@ class PairRig:
         self.mount_R = np.stack([np.eye(3), np.eye(3)])
         self.mount_p = np.zeros((2, 3))
         self.r = float(geo[0, 0])
-        self.scratch = np.zeros((scratch_rows(geo[:, 0], geo[:, 1], cell), 5))
+        self.scratch = np.zeros((scratch_rows(geo[:, 0], geo[:, 1], cell), SCRATCH_COLUMNS))
         # each screw's spin sign makes h ω > 0: both advance along +x
         self.joint_v = np.array([OMEGA * np.sign(geo[0, 3]), OMEGA * np.sign(geo[1, 3])])
         self.v_ideal = OMEGA * self.r * math.tan(float(geo[0, 2]))
@@ -93,8 +94,8 @@ class PairRig:
         st = self.terrain.state
         w, per, tot = np.zeros((2, 6)), np.zeros((2, 5)), np.zeros(2)
         dt_, dp, on = np.zeros((2, 6, 6)), np.zeros((2, 6, 6)), np.zeros(2, dtype=np.bool_)
-        screw_soil(self.terrain.grid, self.terrain.soil, st.tile_of, st.plastic, st.yield_p, st.used, self.rows,
-                   self.geo, self.mount_R, self.mount_p, poses, vels, self.joint_v, 0.5, 0.01, False,
+        screw_soil(self.terrain.grid, self.terrain.base_z, self.terrain.soil, st.tile_of, st.plastic, st.yield_p,
+                   st.used, self.rows, self.geo, self.mount_R, self.mount_p, poses, vels, self.joint_v, 0.5, 0.01, False,
                    self.scratch, w, per, tot, False, dt_, dp, on)
         return per[:, NORMAL].sum(), per[:, THRUST].sum()
 
@@ -170,15 +171,20 @@ def cost(quick: bool) -> list[dict]:
             tiles = math.ceil((20.0 / cell + 1) / 32) ** 2
             path.write_text(text.replace("cell: 0.02", f"cell: {cell}").replace("max_tiles: 1024",
                                                                                   f"max_tiles: {tiles}"))
-            s = load_session("snow-screw-traverse", overrides=[f"terrain={path}", "settle=0.5"],
-                             sim_overrides={"duration": duration})
-            t0 = time.perf_counter()
-            r = s.run()
-            wall = time.perf_counter() - t0
-            steps = r.summary["steps"]
-            rows.append({"cell_m": cell, "steps": steps, "wall_s": wall, "us_per_step": wall / steps * 1e6,
-                         "real_time_factor": duration / wall, "outcome": r.summary["outcome"]})
+            rows.append(_cost_row(str(path), cell, "plane", duration))
+    rows.append(_cost_row("snow-dem", 0.02, "dem", duration))
     return rows
+
+
+def _cost_row(terrain: str, cell: float, base: str, duration: float) -> dict:
+    s = load_session("snow-screw-traverse", overrides=[f"terrain={terrain}", "settle=0.5"],
+                     sim_overrides={"duration": duration})
+    t0 = time.perf_counter()
+    r = s.run()
+    wall = time.perf_counter() - t0
+    steps = r.summary["steps"]
+    return {"cell_m": cell, "base": base, "steps": steps, "wall_s": wall, "us_per_step": wall / steps * 1e6,
+            "real_time_factor": duration / wall, "outcome": r.summary["outcome"]}
 
 
 def _shown(path: Path) -> str:
@@ -265,9 +271,9 @@ def table(out: dict) -> str:
     lines += [f"   {r['scene']:24s} {r['screw_rate_rad_s']:5.1f}  {r['speed_m_s']:7.4f}  {r['real_time_factor']:6.1f}  "
               f"{r['outcome']}" for r in out["speed"]]
     lines += ["3. cost against the snow grid's cell (snow-screw-traverse, its own settings)",
-              "   cell m   steps   µs/step   RTF    outcome"]
-    lines += [f"   {r['cell_m']:6.3f}  {r['steps']:6d}  {r['us_per_step']:8.0f}  {r['real_time_factor']:5.1f}  "
-              f"{r['outcome']}" for r in out["cost"]]
+              "   cell m   base    steps   µs/step   RTF    outcome"]
+    lines += [f"   {r['cell_m']:6.3f}  {r['base']:6s} {r['steps']:6d}  {r['us_per_step']:8.0f}  "
+              f"{r['real_time_factor']:5.1f}  {r['outcome']}" for r in out["cost"]]
     lines += ["4. the schedule on snow and on hard ice", "   scene                    s     made good m   path m   RTF   outcome"]
     lines += [f"   {r['scene']:24s} {r['duration_s']:4.0f}  {r['distance_made_good_m']:10.3f}  {r['path_length_m']:7.3f}  "
               f"{r['real_time_factor']:5.1f}  {r['outcome']}" for r in out["traverse"]]
@@ -312,8 +318,11 @@ def plot(out: dict, path: Path) -> None:
     ax[1].set_ylabel("tail speed along the chord (m/s)")
     ax[1].set_title("EELS 1.0, forward phase")
     ax[1].legend()
-    c = out["cost"]
-    ax[2].loglog([r["cell_m"] for r in c], [r["us_per_step"] for r in c], marker="o")
+    c = [r for r in out["cost"] if r["base"] == "plane"]
+    ax[2].loglog([r["cell_m"] for r in c], [r["us_per_step"] for r in c], marker="o", label="plane base")
+    d = [r for r in out["cost"] if r["base"] == "dem"]
+    ax[2].loglog([r["cell_m"] for r in d], [r["us_per_step"] for r in d], marker="s", ls="", label="DEM base")
+    ax[2].legend()
     ax[2].set_xlabel("snow grid cell (m)")
     ax[2].set_ylabel("wall µs per 20 ms step")
     ax[2].set_title("cost per step")

@@ -70,6 +70,20 @@ class PlaneTerrain(Terrain):
 
         return plane_parts(self)
 
+    def height_grid(self, lo, hi, reach: float = 1000.0):
+        """Two samples a side, ``reach`` m beyond the box (a square: one spacing both ways): bilinear
+        interpolation reproduces a plane exactly, to rounding. None for a plane steeper than 80° (not a
+        height field one could lay soil on)."""
+        if self.n[2] < np.cos(np.radians(80.0)):
+            return None
+        side = max(hi[0] - lo[0], hi[1] - lo[1]) + 2.0 * reach
+        x = np.array([lo[0] - reach, lo[0] - reach + side])
+        y = np.array([lo[1] - reach, lo[1] - reach + side])
+        X, Y = np.meshgrid(x, y)                               # rows y, columns x
+        o, n = self.origin, self.n
+        z = o[2] - (n[0] * (X - o[0]) + n[1] * (Y - o[1])) / n[2]
+        return z, float(side), (float(x[0]), float(y[0]))
+
     def fast_plane(self):
         # a subclass that keeps the plane's query keeps the compiled plane kernels
         return (self.origin, self.n) if type(self)._query is PlaneTerrain._query else None

@@ -288,6 +288,13 @@ class Terrain:
         the kind's continuous surface; None for a kind without parts (the default)."""
         return None
 
+    def height_grid(self, lo, hi):
+        """The surface as a height field z = h(x, y) covering at least the box ``lo``…``hi`` ((x, y), m,
+        world): (z (rows y, columns x) m, spacing m, (x0, y0) of z[0, 0] m), read bilinearly with its edge
+        values extended flat (terrain/dem.py's convention). What a deformable soil is laid on
+        (terrain/deformable.py's ``base``); None for a kind that is not a height field (the default)."""
+        return None
+
     def fast_plane(self):
         """(origin, unit normal) when the whole terrain is that one plane and its query may be replaced
         by the compiled plane kernels of the SDF contact; None otherwise."""

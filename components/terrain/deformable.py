@@ -1,8 +1,10 @@
-"""Deformable height field (kind ``deformable``): a soft soil (snow, regolith) on a flat base that keeps
-the ruts a robot leaves.
+"""Deformable height field (kind ``deformable``): a soft soil (snow, regolith) laid on a base (a plane or
+a DEM) that keeps the ruts a robot leaves.
 
     kind: deformable
-    base_height: 0.0          # m, the virgin surface (a horizontal plane)
+    base_height: 0.0          # m, the virgin surface: a horizontal plane at this height (the default, 0), or
+    base: fractal-dem         #   a height-field terrain (a name, a file relative to this one, or an inline
+                              #   mapping) of kind dem or plane: the virgin surface follows it
     origin: [-10, -10]        # m, the patch's corner (x, y); nodes every ``cell`` m
     size: [20, 20]            # m, the patch (outside it: the base, rigid)
     cell: 0.02                # m, node spacing
@@ -20,11 +22,16 @@ table of tiles, a tile allocated from a pool of ``max_tiles`` on its first load,
 2 cm costs memory where the robot went (a tile is 32 × 32 nodes × 2 arrays × 8 B = 16 KiB; the pool is
 allocated with calloc, so untouched tiles are not even resident).
 
+Base: any terrain whose kind gives a height field (``Terrain.height_grid``: dem, plane) is read at the
+nodes (bilinearly; a DEM finer than ``cell`` is smoothed to the nodes, one whose samples fall on nodes is
+reproduced exactly). The soil law then acts along the base's normal, as SCM's grid over a height map:
+sinkage s = cos(slope)·(base − z) (deformable_kernels.py).
+
 Query: the unloaded surface base − s_p, bilinear between nodes; distance and normal first-order as a
 DEM's (d = (z − h)/√(1 + |∇h|²)). Units SI, world frame, z up.
 
-Not modelled here: a DEM base (the base is a plane), soil pushed aside (bulldozing berms; the rut's
-volume vanishes, as SCM without its bulldozing option), lateral soil pressure on the rut walls.
+Not modelled here: soil pushed aside (bulldozing berms; the rut's volume vanishes, as SCM without its
+bulldozing option), lateral soil pressure on the rut walls, soil sliding down a slope of itself.
 """
 
 from __future__ import annotations
@@ -36,7 +43,7 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator, model_valida
 from typing import Literal
 
 from .base import Bounds, Terrain, TerrainMesh, TerrainState
-from .deformable_kernels import TILE, empty_used, query_surface, surface
+from .deformable_kernels import TILE, empty_used, query_surface
 from .spec_models import KindSpec
 
 
@@ -72,7 +79,10 @@ class SoilSpec(BaseModel):
 
 class DeformableSpec(KindSpec):
     kind: Literal["deformable"]
-    base_height: float = Field(0.0, description="m, the virgin surface")
+    base_height: float | None = Field(None, description="m, the virgin surface, a horizontal plane (default 0)")
+    base: str | dict | None = Field(None, description="the virgin surface, a height-field terrain (kind dem or "
+                                                      "plane): a terrain name, a file relative to this one, or an "
+                                                      "inline mapping; instead of base_height")
     origin: tuple[float, float] = Field((-10.0, -10.0), description="m, the patch's corner")
     size: tuple[float, float] = Field((20.0, 20.0), description="m, the patch's sides (x, y)")
     cell: float = Field(0.02, gt=0, description="m, node spacing")
@@ -93,12 +103,16 @@ class DeformableSpec(KindSpec):
                                  f"load; give k_c + k_phi·b > 0 for b from cell to the patch size")
         if not (self.size[0] > self.cell and self.size[1] > self.cell):
             raise ValueError(f"size = {list(self.size)} m: each side must exceed cell = {self.cell} m")
+        if self.base is not None and self.base_height is not None:
+            raise ValueError(f"give base_height (a horizontal plane) or base (a height-field terrain), not both: "
+                             f"base_height = {self.base_height}, base = {self.base!r}")
         return self
 
 
 class DeformableTerrain(Terrain):
-    """The deformable height field (module docstring). ``grid`` [x0, y0, cell, base, nx, ny] and ``soil``
-    [k_c, k_phi, n, c, tan φ, K, K_e, R] are float64 records the kernels read; ``source`` the file."""
+    """The deformable height field (module docstring). ``grid`` [x0, y0, cell, base, nx, ny, dem x0, y0,
+    spacing, slope bound], ``base_z`` (the base's heights; 1 × 1 on a horizontal plane) and ``soil`` [k_c,
+    k_phi, n, c, tan φ, K, K_e, R] are the float64 records the kernels read; ``source`` the file."""
 
     kind = "deformable"
     regions = ("surface",)
@@ -108,7 +122,9 @@ class DeformableTerrain(Terrain):
     lipschitz = 3.0
 
     def __init__(self, base_height: float, origin, size, cell: float, soil: SoilSpec, max_tiles: int = 2048,
-                 source: str = "<deformable terrain>", **kw):
+                 source: str = "<deformable terrain>", base_grid=None, **kw):
+        """``base_grid``: (z, spacing, (x0, y0)) of a height-field base (Terrain.height_grid), or None: the
+        plane z = ``base_height``."""
         nx = int(math.floor(size[0] / cell)) + 1
         ny = int(math.floor(size[1] / cell)) + 1
         ntx, nty = -(-nx // TILE), -(-ny // TILE)
@@ -117,8 +133,21 @@ class DeformableTerrain(Terrain):
                              yield_p=np.zeros((max_tiles, TILE, TILE)),
                              used=empty_used(max_tiles))
         super().__init__(state=state, **kw)
-        self.grid = np.array([origin[0], origin[1], cell, base_height, nx, ny], dtype=np.float64)
+        if base_grid is None:
+            self.base_z = np.zeros((1, 1))
+            dem = (0.0, 0.0, 0.0, 0.0)          # spacing 0: the plane
+            self.base_range = (float(base_height), float(base_height))
+        else:
+            z, res, (bx, by) = base_grid
+            self.base_z = np.ascontiguousarray(z, dtype=np.float64)
+            dx, dy = np.abs(np.diff(self.base_z, axis=1)), np.abs(np.diff(self.base_z, axis=0))
+            slope = math.hypot(float(dx.max(initial=0.0)), float(dy.max(initial=0.0))) / res
+            dem = (float(bx), float(by), float(res), slope)
+            self.base_range = (float(self.base_z.min()), float(self.base_z.max()))
+            self.lipschitz = max(self.lipschitz, math.sqrt(1.0 + slope * slope))
+        self.grid = np.array([origin[0], origin[1], cell, base_height, nx, ny, *dem], dtype=np.float64)
         self.cell, self.base_height, self.source = float(cell), float(base_height), source
+        self._virgin = np.full_like(state.tile_of, -1)       # a tile table with nothing touched: the base
         self.soil_spec = soil
         self.soil = np.array([soil.k_c, soil.k_phi, soil.n, soil.cohesion, math.tan(math.radians(soil.friction_angle)),
                               soil.janosi_k, soil.elastic_k, soil.damping], dtype=np.float64)
@@ -150,24 +179,32 @@ class DeformableTerrain(Terrain):
         st.used[...] = snap["used"]
         st.changed(t)
 
-    def rut_depth(self, x, y) -> np.ndarray:
-        """Plastic sinkage (m, ≥ 0) of the unloaded surface at points (x, y): base − h."""
+    def surface_height(self, x, y, virgin: bool = False) -> np.ndarray:
+        """Height (m) of the unloaded surface at points (x, y) (broadcast); ``virgin``: of the base as the
+        nodes read it, before any rut."""
         x, y = np.broadcast_arrays(np.asarray(x, float), np.asarray(y, float))
-        h = np.array([surface(self.grid, self.state.tile_of, self.state.plastic, a, b)[0]
-                      for a, b in zip(x.ravel(), y.ravel())])
-        return (self.base_height - h).reshape(x.shape)
+        p = np.zeros((x.size, 3))
+        p[:, 0], p[:, 1] = x.ravel(), y.ravel()
+        d, n = np.empty(x.size), np.empty((x.size, 3))
+        query_surface(self.grid, self.base_z, self._virgin if virgin else self.state.tile_of, self.state.plastic,
+                      p, d, n)
+        return (-d / n[:, 2]).reshape(x.shape)        # d = (0 − h)/√(1 + |∇h|²), n_z = 1/√(…)
+
+    def rut_depth(self, x, y) -> np.ndarray:
+        """Plastic sinkage (m, ≥ 0, vertical) of the unloaded surface at points (x, y): base − h."""
+        return self.surface_height(x, y, virgin=True) - self.surface_height(x, y)
 
     # -- the Terrain interface ---------------------------------------------------
     def _query(self, p):
         d = np.empty(p.shape[0])
         n = np.empty((p.shape[0], 3))
-        query_surface(self.grid, self.state.tile_of, self.state.plastic, p, d, n)
+        query_surface(self.grid, self.base_z, self.state.tile_of, self.state.plastic, p, d, n)
         return d, n, np.zeros(p.shape[0], dtype=np.int64)
 
     def bounds(self) -> Bounds:
-        # the base extends beyond the patch (rigid there): unbounded in x, y
-        return Bounds(np.array([-np.inf, -np.inf, self.base_height - 1.0]),
-                      np.array([np.inf, np.inf, self.base_height]))
+        # the base extends beyond the patch (rigid there): unbounded in x, y; ruts at most 1 m deep
+        lo, hi = self.base_range
+        return Bounds(np.array([-np.inf, -np.inf, lo - 1.0]), np.array([np.inf, np.inf, hi]))
 
     def display_mesh(self, center, extent, cell, cutaway) -> TerrainMesh:
         """The surface as it is now (ruts drawn) on a grid of max(cell, terrain cell) over ``extent`` m
@@ -180,13 +217,8 @@ class DeformableTerrain(Terrain):
         xs = c[0] - extent + step * np.arange(k)
         ys = c[1] - extent + step * np.arange(k)
         X, Y = np.meshgrid(xs, ys, indexing="ij")
-        P = np.stack([X, Y, np.zeros_like(X)], axis=-1)
-        d = np.empty(k * k)
-        n = np.empty((k * k, 3))
-        flat = P.reshape(-1, 3)
-        query_surface(self.grid, self.state.tile_of, self.state.plastic, flat, d, n)
-        P[..., 2] = (-d / n[:, 2]).reshape(k, k)       # h = z − d·√(1 + |∇h|²), here at z = 0
-        depth = np.clip((self.base_height - P[..., 2]) / 0.1, 0.0, 1.0)
+        P = np.stack([X, Y, self.surface_height(X, Y)], axis=-1)
+        depth = np.clip((self.surface_height(X, Y, virgin=True) - P[..., 2]) / 0.1, 0.0, 1.0)
         dc = 0.25 * (depth[:-1, :-1] + depth[1:, :-1] + depth[:-1, 1:] + depth[1:, 1:])
         high, low = np.array([240.0, 248.0, 255.0]), np.array([150.0, 170.0, 200.0])
         tones = (high + dc[..., None] * (low - high)).astype(np.uint8)      # ruts darker
@@ -197,8 +229,9 @@ class DeformableTerrain(Terrain):
 
 
 def build_deformable(spec: DeformableSpec, context, **kw) -> DeformableTerrain:
-    terrain = DeformableTerrain(spec.base_height, spec.origin, spec.size, spec.cell, spec.soil, spec.max_tiles,
-                                source=str(context.source), **kw)
+    base_grid = None if spec.base is None else _base_grid(spec, context)
+    terrain = DeformableTerrain(spec.base_height or 0.0, spec.origin, spec.size, spec.cell, spec.soil,
+                                spec.max_tiles, source=str(context.source), base_grid=base_grid, **kw)
     if spec.initial_state is not None:
         import zipfile
         from pathlib import Path
@@ -216,6 +249,34 @@ def build_deformable(spec: DeformableSpec, context, **kw) -> DeformableTerrain:
         except (ValueError, KeyError, OSError, zipfile.BadZipFile) as e:
             raise ConfigError(f"initial_state: {e}", str(context.source), "initial_state") from None
     return terrain
+
+
+def _base_grid(spec: DeformableSpec, context):
+    """The height grid of ``spec.base`` (a terrain name, a file relative to the terrain file, or an inline
+    mapping), over the patch; a ConfigError naming ``base`` when it is not a height field."""
+    from pathlib import Path
+
+    from snakesim.framework import ConfigError
+
+    from .spec import build_terrain, load_terrain
+
+    ref = spec.base
+    try:
+        if isinstance(ref, dict):
+            base = build_terrain(ref, Path(context.base_dir), f"{context.source} (base)", store=context.store)
+        else:
+            local = Path(context.base_dir) / Path(ref).expanduser()
+            base = load_terrain(str(local) if local.is_file() else ref, store=context.store)
+    except ConfigError as e:
+        raise ConfigError(f"base: {e}", str(context.source), "base") from None
+    lo = (spec.origin[0], spec.origin[1])
+    hi = (spec.origin[0] + spec.size[0], spec.origin[1] + spec.size[1])
+    grid = base.height_grid(lo, hi)
+    if grid is None:
+        raise ConfigError(f"base = {ref if isinstance(ref, str) else 'the inline terrain'} is a terrain of kind "
+                          f"'{base.kind}', not a height field: a soil is laid on a kind whose surface is z = h(x, y) "
+                          f"(dem, or a plane less steep than 80°)", str(context.source), "base")
+    return grid
 
 
 def deformable_kind():

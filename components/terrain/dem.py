@@ -95,6 +95,10 @@ class HeightField(Terrain):
 
         return height_field_parts(self)
 
+    def height_grid(self, lo, hi):
+        # the grid itself, wherever the box is: outside it the edges extend flat, as its own query does
+        return self.z, self.res, (self.x0, self.y0)
+
     def _query(self, p):
         h, hx, hy = self.height(p[:, 0], p[:, 1])
         s = np.sqrt(1.0 + hx * hx + hy * hy)

@@ -55,7 +55,7 @@ from snakesim.components.terrain.deformable import DeformableTerrain
 
 from .body_kernels import L_NODES, L_NORMAL, L_SINKAGE, body_soil
 from .contact import check_cell, write_soil_files
-from .kernels import scratch_rows
+from .kernels import SCRATCH_COLUMNS, scratch_rows
 
 
 class SoilBodyContactParams(Params):
@@ -149,15 +149,15 @@ class SoilBodyContact(Component[SoilBodyContactParams]):
         g = self.pieces
         check_cell(terrain, g.geo[:, 0], g.geo[:, 1], g.names, what="body cylinder")
         run.terrain = terrain
-        run.scratch = np.zeros((scratch_rows(g.geo[:, 0], g.geo[:, 1], terrain.cell), 5))
+        run.scratch = np.zeros((scratch_rows(g.geo[:, 0], g.geo[:, 1], terrain.cell), SCRATCH_COLUMNS))
         return terrain
 
     def _evaluate(self, run, terrain, poses, vels, wrenches, commit, jac=False):
         st, g = terrain.state, self.pieces
         wrenches[...] = 0.0
         per_link, totals = (run.jac_per_link, run.jac_totals) if jac else (run.per_link, run.totals)
-        return body_soil(terrain.grid, terrain.soil, st.tile_of, st.plastic, st.yield_p, st.used, g.link, g.geo, g.R,
-                         g.p, np.ascontiguousarray(poses, dtype=np.float64),
+        return body_soil(terrain.grid, terrain.base_z, terrain.soil, st.tile_of, st.plastic, st.yield_p, st.used,
+                         g.link, g.geo, g.R, g.p, np.ascontiguousarray(poses, dtype=np.float64),
                          np.ascontiguousarray(vels, dtype=np.float64), self.p.v_eps, commit, run.scratch, wrenches,
                          per_link, totals, jac, run.d_twist, run.d_pose, run.on_link)
 

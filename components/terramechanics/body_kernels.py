@@ -12,11 +12,13 @@ Outputs: ``wrenches`` (nl, 6) [f, τ about the link origin], world, added to; ``
 force N, deepest sinkage m, contact nodes; ``totals`` [ΣF_n, contacts].
 
 With ``jac`` the same pass fills the per-link 6×6 blocks a linearly implicit integrator reads (as the
-screws', kernels.py): per node the shear f = −τ A P u / ρ (P = across I + (along − across) ĥĥᵀ on the
-horizontal slip u, ρ = √(|u|² + v_ε²)) has ∂f/∂u = −τ A (P / ρ − (P u) uᵀ / ρ³) (finite at rest: τ A P / v_ε,
-the slope that sets an explicit step), the damping −R A ẑẑᵀ while loaded; the height derivative is the
-pressure's, −σ'(s) (A ẑ + f tan φ / τ_max), σ' = K_e (elastic) or n σ / s (Bekker's). Both moved to the link
-origin as X_cᵀ D X_c. Left out: b, j and the contact set following the pose (lower order).
+screws', kernels.py): per node the pressure acts along the base normal N on A = cell² / N_z (ẑ and cell² on
+a plane base), the shear f = −τ A P t / ρ (t = T u the slip in the base's tangent plane, T = I − N Nᵀ; P =
+across I + (along − across) ĥĥᵀ, ĥ the link's axis in that plane; ρ = √(|t|² + v_ε²)) has ∂f/∂u = −τ A (P T / ρ
+− (P t) tᵀ / ρ³) (finite at rest: τ A P / v_ε, the slope that sets an explicit step), the damping −R A N Nᵀ
+while loaded; the height derivative is the pressure's, −σ'(s) N_z (A N + f tan φ / τ_max), σ' = K_e (elastic)
+or n σ / s (Bekker's). Both moved to the link origin as X_cᵀ D X_c. Left out: b, j and the contact set
+following the pose (lower order).
 """
 
 from __future__ import annotations
@@ -28,24 +30,24 @@ from numba import njit
 
 from snakesim.components.contact.jacobian_kernels import add_lever_quadratic, add_lever_rank1
 
-from snakesim.components.terrain.deformable_kernels import (GBASE, GCELL, GX0, GY0, SC, SDAMP, SKE, SKJ, SN,
-                                                           STANPHI, commit_node, node_state, pressure)
+from snakesim.components.terrain.deformable_kernels import (GCELL, SC, SDAMP, SKE, SKJ, SN, STANPHI, commit_node,
+                                                           node_state, pressure)
 
-from .kernels import _I, _J, _ZB, cross, cylinder_nodes, quat_rotate
+from .kernels import (_I, _J, _N0, _N1, _N2, _PX, _PY, _SINK, _ZB, add_normal_damping, cross, cylinder_nodes,
+                      quat_rotate, soil_top)
 
 # per-link output columns
 L_NORMAL, L_SINKAGE, L_NODES = range(3)
 
 
 @njit(cache=True)
-def body_soil(grid, soil, tile_of, plastic, yield_p, used, piece_link, piece_geo, piece_R, piece_p, poses, vels,
+def body_soil(grid, base_z, soil, tile_of, plastic, yield_p, used, piece_link, piece_geo, piece_R, piece_p, poses, vels,
               v_eps, commit, scratch, wrenches, per_link, totals, jac, d_twist, d_pose, on_link):
     """Every piece against the soil (module docstring; the model: body_contact.py). Returns the nodes a commit
     made flow (0 without ``commit``), −1 when the terrain's tile pool is full. With ``jac``: the links' blocks
     into ``d_twist``, ``d_pose`` (nl, 6, 6), those with one marked in ``on_link`` (cleared first)."""
     cell = grid[GCELL]
-    area = cell * cell
-    x0, y0, base = grid[GX0], grid[GY0], grid[GBASE]
+    cell_area = cell * cell
     c_coh, tan_phi, kj, damp = soil[SC], soil[STANPHI], soil[SKJ], soil[SDAMP]
     flows = 0
     D = np.zeros((3, 3))
@@ -71,9 +73,10 @@ def body_soil(grid, soil, tile_of, plastic, yield_p, used, piece_link, piece_geo
         cx, cy, cz = px + m0, py + m1, pz + m2
         if abs(a2) > 0.98:
             continue                             # standing on its end: not modelled
-        if cz - r * math.sqrt(1.0 - a2 * a2) - 0.5 * L * abs(a2) > base:
+        if cz - r * math.sqrt(1.0 - a2 * a2) - 0.5 * L * abs(a2) > soil_top(grid, base_z, cx, cy, 0.5 * L + r):
             continue                             # wholly above the virgin surface
-        m, s_lo, s_hi, pen = cylinder_nodes(grid, tile_of, plastic, yield_p, cx, cy, cz, a0, a1, a2, r, L, scratch)
+        m, s_lo, s_hi, pen = cylinder_nodes(grid, base_z, tile_of, plastic, yield_p, cx, cy, cz, a0, a1, a2, r, L,
+                                            scratch)
         if m == 0:
             continue
         # Bekker's b: the smaller of the chord of the deepest penetration and the axial extent (as the screws)
@@ -89,65 +92,78 @@ def body_soil(grid, soil, tile_of, plastic, yield_p, used, piece_link, piece_geo
         sx, sy = (sx / sn, sy / sn) if sn > 1e-12 else (0.0, 0.0)
         lead = 1e300
         for n in range(m):
-            lead = min(lead, (x0 + scratch[n, _I] * cell) * sx + (y0 + scratch[n, _J] * cell) * sy)
-        # the axis's horizontal direction (the skin's along; across is its normal in the plane)
-        ah = math.sqrt(a0 * a0 + a1 * a1)
-        h0, h1 = a0 / ah, a1 / ah
-        fx = fy = fz = tx = ty = tz = 0.0
+            lead = min(lead, scratch[n, _PX] * sx + scratch[n, _PY] * sy)
+        fx = fy = fz = tx = ty = tz = fnormal = 0.0
         deepest = 0.0
         for n in range(m):
             i, j = int(scratch[n, _I]), int(scratch[n, _J])
-            zb = scratch[n, _ZB]
-            X, Y = x0 + i * cell, y0 + j * cell
-            sink = base - zb
+            X, Y, zb, sink = scratch[n, _PX], scratch[n, _PY], scratch[n, _ZB], scratch[n, _SINK]   # sink: along N
+            N0, N1, ca = scratch[n, _N0], scratch[n, _N1], scratch[n, _N2]
+            area = cell_area / ca             # the soil surface the node's cell stands for, m²
             deepest = max(deepest, sink)
             s_p, s_y = node_state(tile_of, plastic, yield_p, i, j)
+            s_p = ca * s_p
             sigma = pressure(soil, b, sink, s_p, s_y)[0]
             rx, ry, rz = X - px, Y - py, zb - pz
             w0, w1, w2 = cross(wx, wy, wz, rx, ry, rz)
             u0, u1, u2 = vx + w0, vy + w1, vz + w2           # the link's material point (the soil at rest)
-            sig = max(0.0, sigma - damp * u2)
+            un = N0 * u0 + N1 * u1 + ca * u2
+            sig = max(0.0, sigma - damp * un)
             fn = sig * area
+            # the slip in the base's tangent plane, and the link's axis there (the skin's along; across is
+            # its normal in the plane): on a plane base, the horizontal parts
+            t0, t1, t2 = u0 - un * N0, u1 - un * N1, u2 - un * ca
+            ad = a0 * N0 + a1 * N1 + a2 * ca
+            h0, h1, h2 = a0 - ad * N0, a1 - ad * N1, a2 - ad * ca
+            ah = math.sqrt(h0 * h0 + h1 * h1 + h2 * h2)
+            h0, h1, h2 = h0 / ah, h1 / ah, h2 / ah
             # Janosi–Hanamoto along the sliding direction, the soil sheared since the patch's upstream edge
             ell = X * sx + Y * sy - lead + 0.5 * cell
             tau_max = c_coh + sigma * tan_phi
             tau = tau_max * (1.0 - math.exp(-ell / kj)) * area
-            rh = math.sqrt(u0 * u0 + u1 * u1 + v_eps * v_eps)
-            ua = u0 * h0 + u1 * h1                             # along the link's axis, and across it
-            pu0 = along * ua * h0 + across * (u0 - ua * h0)    # P u
-            pu1 = along * ua * h1 + across * (u1 - ua * h1)
-            f0 = -tau * pu0 / rh
-            f1 = -tau * pu1 / rh
-            f2 = fn
+            rh = math.sqrt(t0 * t0 + t1 * t1 + t2 * t2 + v_eps * v_eps)
+            ua = t0 * h0 + t1 * h1 + t2 * h2                   # along the link's axis, and across it
+            pu0 = along * ua * h0 + across * (t0 - ua * h0)    # P u
+            pu1 = along * ua * h1 + across * (t1 - ua * h1)
+            pu2 = along * ua * h2 + across * (t2 - ua * h2)
+            f0 = fn * N0 - tau * pu0 / rh
+            f1 = fn * N1 - tau * pu1 / rh
+            f2 = fn * ca - tau * pu2 / rh
             fx += f0
             fy += f1
             fz += f2
+            fnormal += fn
             c0, c1, c2 = cross(rx, ry, rz, f0, f1, f2)
             tx += c0
             ty += c1
             tz += c2
             if jac:
+                # ∂f/∂u = −τA (P T / ρ − (P t) tᵀ / ρ³), T = I − N Nᵀ the tangent projector
+                # (P T = across T + (along − across) ĥĥᵀ, ĥ in the plane)
                 g = tau / rh
                 g3 = tau / (rh * rh * rh)
                 dp = along - across
-                D[0, 0] = -g * (across + dp * h0 * h0) + g3 * pu0 * u0
-                D[0, 1] = -g * dp * h0 * h1 + g3 * pu0 * u1
-                D[1, 0] = -g * dp * h1 * h0 + g3 * pu1 * u0
-                D[1, 1] = -g * (across + dp * h1 * h1) + g3 * pu1 * u1
-                D[0, 2] = D[1, 2] = D[2, 0] = D[2, 1] = 0.0
-                D[2, 2] = -damp * area if sig > 0.0 else 0.0
+                nv, hv, tv, pv = (N0, N1, ca), (h0, h1, h2), (t0, t1, t2), (pu0, pu1, pu2)
+                for a in range(3):
+                    for c in range(3):
+                        proj = (1.0 if a == c else 0.0) - nv[a] * nv[c]
+                        D[a, c] = -g * (across * proj + dp * hv[a] * hv[c]) + g3 * pv[a] * tv[c]
+                if sig > 0.0:
+                    add_normal_damping(D, damp * area, N0, N1, ca)
                 rc[0], rc[1], rc[2] = rx, ry, rz
                 add_lever_quadratic(rc, D, d_twist[row])
                 if sig > 0.0 and sink > s_p:
                     # σ' on the branch pressure() took: elastic (K_e (s − s_p)) or Bekker's (n σ / s)
                     dsig = soil[SKE] if sigma == soil[SKE] * (sink - s_p) else soil[SN] * sigma / sink
                     k_sh = tan_phi / tau_max
-                    gk[0], gk[1], gk[2] = f0 * k_sh, f1 * k_sh, area
-                    mk[2] = -dsig
+                    gk[0] = area * N0 - tau * pu0 / rh * k_sh
+                    gk[1] = area * N1 - tau * pu1 / rh * k_sh
+                    gk[2] = area * ca - tau * pu2 / rh * k_sh
+                    mk[0], mk[1], mk[2] = -dsig * N0, -dsig * N1, -dsig * ca     # ∂s/∂p = −N
                     add_lever_rank1(rc, gk, mk, d_pose[row])
                 on_link[row] = True
             if commit:
-                f = commit_node(grid, soil, tile_of, plastic, yield_p, used, i, j, sink, b)
+                f = commit_node(grid, soil, tile_of, plastic, yield_p, used, i, j, sink, b, ca)
                 if f < 0:
                     return -1
                 flows += f
@@ -157,9 +173,9 @@ def body_soil(grid, soil, tile_of, plastic, yield_p, used, piece_link, piece_geo
         wrenches[row, 3] += tx
         wrenches[row, 4] += ty
         wrenches[row, 5] += tz
-        per_link[row, L_NORMAL] += fz
+        per_link[row, L_NORMAL] += fnormal
         per_link[row, L_SINKAGE] = max(per_link[row, L_SINKAGE], deepest)
         per_link[row, L_NODES] += m
-        totals[0] += fz
+        totals[0] += fnormal
         totals[1] += m
     return flows

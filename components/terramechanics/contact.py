@@ -70,7 +70,7 @@ from snakesim.components.multibody.robot_ports import joint_names, joint_shape, 
 from snakesim.components.terrain.base import Terrain
 from snakesim.components.terrain.deformable import DeformableTerrain
 
-from .kernels import NODES, NORMAL, SINKAGE, SLIP, THRUST, scratch_rows, screw_soil
+from .kernels import NODES, NORMAL, SCRATCH_COLUMNS, SINKAGE, SLIP, THRUST, scratch_rows, screw_soil
 
 
 class TerramechanicsContactParams(Params):
@@ -127,7 +127,7 @@ class SoilEvaluation:
     one for the outputs, one for the commit)."""
 
     def __init__(self, ns: int, rows: int, nl: int):
-        self.scratch = np.zeros((rows, 5))
+        self.scratch = np.zeros((rows, SCRATCH_COLUMNS))
         self.per_screw = np.zeros((ns, 5))
         self.totals = np.zeros(2)
         # the Jacobian's blocks (filled only by an evaluation with jac; kernels.py docstring)
@@ -141,8 +141,8 @@ def evaluate(terrain: DeformableTerrain, g: ScrewGeometry, poses, vels, joint_v,
     ``ev``'s Jacobian blocks with ``jac``. The number of nodes that flowed, −1 when the tile pool is full."""
     st = terrain.state
     wrenches[...] = 0.0
-    return screw_soil(terrain.grid, terrain.soil, st.tile_of, st.plastic, st.yield_p, st.used, g.rows, g.geo,
-                      g.mount_R, g.mount_p, np.ascontiguousarray(poses, dtype=np.float64),
+    return screw_soil(terrain.grid, terrain.base_z, terrain.soil, st.tile_of, st.plastic, st.yield_p, st.used, g.rows,
+                      g.geo, g.mount_R, g.mount_p, np.ascontiguousarray(poses, dtype=np.float64),
                       np.ascontiguousarray(vels, dtype=np.float64), np.ascontiguousarray(joint_v, dtype=np.float64),
                       helix_ratio, v_eps, commit, ev.scratch, wrenches, ev.per_screw, ev.totals, jac, ev.d_twist,
                       ev.d_pose, ev.on_link)

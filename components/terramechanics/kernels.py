@@ -11,17 +11,20 @@ Per screw s the arrays are (ScrewGeometry, contact.py):
 Outputs: ``wrenches`` (nl, 6) [f, τ about the screw link's origin], world, added to; ``per_screw``
 (ns, 5): sinkage m, slip 1, thrust N, normal force N, contacts (node count); ``totals`` [ΣF_n, contacts].
 
+Per node: the pressure acts along the base's normal N (ẑ on a plane base) on A = cell² / N_z, the soil
+surface the node's cell stands for; the sinkage is taken along N (terrain/deformable_kernels.py).
+
 With ``jac`` the same pass also fills the per-link 6×6 blocks a linearly implicit integrator reads
 (multibody/linearization.py, LinkWrenchJacobian): per node the force's velocity derivative
 
-    ∂F/∂v = ∂s_c/∂v_x ê_x ê_xᵀ + ∂s_c/∂v_h ê_x ê_hᵀ + ∂s_h/∂v_h ê_h ê_hᵀ (− R A ẑẑᵀ while loaded)
+    ∂F/∂v = ∂s_c/∂v_x ê_x ê_xᵀ + ∂s_c/∂v_h ê_x ê_hᵀ + ∂s_h/∂v_h ê_h ê_hᵀ (− R A N Nᵀ loaded)
     s_c = −A τ_max (1 − e^(−j/K)) sgn v_x,  j = |v_x| ℓ / √(v_h² + v_ε²):
         ∂s_c/∂v_x = −A τ_max e^(−j/K) ℓ / (K √(v_h² + v_ε²))      (finite at v_x = 0: a viscous slope)
         ∂s_c/∂v_h =  A τ_max e^(−j/K) sgn v_x · j v_h / (K (v_h² + v_ε²))
     s_h = −ρ A τ_max (1 − e^(−ℓ/K)) v_h / √(v_h² + v_ε²):   ∂s_h/∂v_h = −ρ A τ_max (1 − e^(−ℓ/K)) v_ε² / (…)^(3/2)
 
-and its height derivative (the sinkage s falls as the node's contact point rises): ∂F/∂z =
-−σ'(s) (A ẑ + F_shear tan φ / τ_max), σ' = K_e on the elastic branch, n σ / s on Bekker's; both moved to
+and its height derivative (the sinkage s = N_z (h − z) falls as the node's contact point rises): ∂F/∂z =
+−σ'(s) N_z (A N + F_shear tan φ / τ_max), σ' = K_e on the elastic branch, n σ / s on Bekker's; both moved to
 the screw link's origin as X_cᵀ D X_c (contact/jacobian_kernels.py: the point velocity is X_c of the screw
 link's twist, the link's origin being on the spin axis). Left out: the patch's b, ℓ and the contact set
 moving with the pose (lower order; a W-method keeps its order with any matrix).
@@ -35,13 +38,16 @@ import numpy as np
 from numba import njit
 
 from snakesim.components.contact.jacobian_kernels import add_lever_quadratic, add_lever_rank1
-from snakesim.components.terrain.deformable_kernels import (GBASE, GCELL, GNX, GNY, GX0, GY0, SC, SDAMP, SKE, SKJ,
-                                                           SN, STANPHI, commit_node, node_state, pressure)
+from snakesim.components.terrain.deformable_kernels import (GCELL, GDRES, GNX, GNY, GSLOPE, GX0, GY0, SC, SDAMP, SKE,
+                                                           SKJ, SN, STANPHI, base_height, base_normal, commit_node,
+                                                           node_base, node_normal, node_state, pressure)
 
 # per-screw output columns
 SINKAGE, SLIP, THRUST, NORMAL, NODES = range(5)
-# scratch columns per contact node: i, j, z_b, s_ax, u (arc round the envelope from its bottom)
-_I, _J, _ZB, _SAX, _U = range(5)
+# scratch columns per contact node: i, j, the contact point P (x, y, z; m), s_ax (along the axis), u (arc round
+# the envelope from its bottom), the sinkage along the base normal, the base normal N there
+_I, _J, _PX, _PY, _ZB, _SAX, _U, _SINK, _N0, _N1, _N2 = range(11)
+SCRATCH_COLUMNS = 11
 
 
 @njit(cache=True, inline="always")
@@ -91,39 +97,65 @@ def _band(coef, off, half):
 
 
 @njit(cache=True)
-def cylinder_nodes(grid, tile_of, plastic, yield_p, cx, cy, cz, a0, a1, a2, r, L, scratch):
-    """The nodes under a finite cylinder (centre c, unit axis a, radius r, length L) whose unloaded surface is
-    above its underside, into ``scratch`` rows (i, j, z_b, s_ax, u: the arc round the envelope from its
-    bottom, + towards a × e_down); (count, least and largest s_ax, deepest penetration below the surface).
-    Shared by the screws and the body links (body_kernels.py)."""
+def cylinder_along_normal(cx, cy, cz, a0, a1, a2, r, sx, sy, sz, n0, n1, n2):
+    """Where the line S + t N (S a surface point, N the unit base normal there) enters the infinite cylinder
+    (centre c, unit axis a, radius r) from below: (t, axial coordinate of the point); (nan, 0) when it misses.
+    Solves |d + t N|² − ((d + t N)·a)² = r², d = S − c, for its lower root."""
+    d0, d1, d2 = sx - cx, sy - cy, sz - cz
+    da = d0 * a0 + d1 * a1 + d2 * a2
+    na = n0 * a0 + n1 * a1 + n2 * a2
+    A = 1.0 - na * na
+    B = d0 * n0 + d1 * n1 + d2 * n2 - da * na
+    C = d0 * d0 + d1 * d1 + d2 * d2 - da * da - r * r
+    disc = B * B - A * C
+    if disc < 0.0 or A < 1e-9:
+        return math.nan, 0.0
+    t = (-B - math.sqrt(disc)) / A
+    return t, da + t * na
+
+
+@njit(cache=True)
+def cylinder_nodes(grid, base_z, tile_of, plastic, yield_p, cx, cy, cz, a0, a1, a2, r, L, scratch):
+    """The nodes whose unloaded surface a finite cylinder (centre c, unit axis a, radius r, length L) presses,
+    into ``scratch`` rows (the columns above: the contact point P where the node's line along the base normal
+    enters the cylinder, vertical on a plane base; u + towards a × e_down); (count, least and largest s_ax,
+    deepest penetration below the rutted surface along the normal). Shared by the screws and the body links
+    (body_kernels.py)."""
     cell = grid[GCELL]
-    x0, y0, base = grid[GX0], grid[GY0], grid[GBASE]
+    x0, y0 = grid[GX0], grid[GY0]
     nx, ny = int(grid[GNX]), int(grid[GNY])
-    # footprint box of the cylinder in x, y
-    ex = abs(a0) * 0.5 * L + r * math.sqrt(max(0.0, 1.0 - a0 * a0))
-    ey = abs(a1) * 0.5 * L + r * math.sqrt(max(0.0, 1.0 - a1 * a1))
+    plane = grid[GDRES] == 0.0
+    # footprint box of the cylinder in x, y; on a sloped base the normal lines lean: up to the cylinder's
+    # diameter times the sine of the steepest slope further
+    lean = 0.0 if plane else 2.0 * r * grid[GSLOPE] / math.sqrt(1.0 + grid[GSLOPE] * grid[GSLOPE])
+    ex = abs(a0) * 0.5 * L + r * math.sqrt(max(0.0, 1.0 - a0 * a0)) + lean
+    ey = abs(a1) * 0.5 * L + r * math.sqrt(max(0.0, 1.0 - a1 * a1)) + lean
     i_lo = max(0, int(math.ceil((cx - ex - x0) / cell)))
     i_hi = min(nx - 1, int(math.floor((cx + ex - x0) / cell)))
     j_lo = max(0, int(math.ceil((cy - ey - y0) / cell)))
     j_hi = min(ny - 1, int(math.floor((cy + ey - y0) / cell)))
-    # the screw frame on the ground: e_down ⟂ a, towards −z; e_side = a × e_down (the arc coordinate's +)
-    dn0, dn1, dn2 = a2 * a0, a2 * a1, a2 * a2 - 1.0
+    # the screw frame on the ground: e_down ⟂ a, towards −N (the base's normal under the centre; −z on a
+    # plane base); e_side = a × e_down (the arc coordinate's +)
+    N0, N1, N2 = base_normal(grid, base_z, cx, cy)
+    ad = a0 * N0 + a1 * N1 + a2 * N2
+    dn0, dn1, dn2 = ad * a0 - N0, ad * a1 - N1, ad * a2 - N2
     dl = math.sqrt(dn0 * dn0 + dn1 * dn1 + dn2 * dn2)
     dn0, dn1, dn2 = dn0 / dl, dn1 / dl, dn2 / dl
     sd0, sd1, sd2 = cross(a0, a1, a2, dn0, dn1, dn2)
     # per row of nodes, only the j where the vertical line can meet the finite cylinder: its footprint
     # lies in the strip |n̂_h·d| ≤ r about the projected axis (n̂_h horizontal, ⟂ the axis) and within
     # |ĥ·d| ≤ (L/2)|a_h| + r|a_z| along it (ĥ the axis's horizontal direction); the box alone holds ~3×
-    # the nodes for a screw at 45° in yaw
+    # the nodes for a screw at 45° in yaw. The normal lines of a sloped base: both widened by their lean
     ah = math.sqrt(a0 * a0 + a1 * a1)
     h0, h1 = a0 / ah, a1 / ah
-    half_ax = 0.5 * L * ah + r * abs(a2) + 1e-9
+    half_ax = 0.5 * L * ah + r * abs(a2) + 1e-9 + lean
+    half_across = r + 1e-9 + lean
     m = 0
     s_lo, s_hi, pen = 1e300, -1e300, 0.0
     for i in range(i_lo, i_hi + 1):
         x = x0 + i * cell
         ddx = x - cx
-        lo1, hi1 = _band(h0, -h1 * ddx, r + 1e-9)             # n̂_h·d = −h1 dx + h0 dy
+        lo1, hi1 = _band(h0, -h1 * ddx, half_across)            # n̂_h·d = −h1 dx + h0 dy
         lo2, hi2 = _band(h1, h0 * ddx, half_ax)                 # ĥ·d = h0 dx + h1 dy
         lo, hi = max(lo1, lo2), min(hi1, hi2)
         if lo > hi:
@@ -133,37 +165,69 @@ def cylinder_nodes(grid, tile_of, plastic, yield_p, cx, cy, cz, a0, a1, a2, r, L
         jj_hi = j_hi if f_hi >= j_hi else int(math.floor(f_hi))
         for j in range(jj_lo, jj_hi + 1):
             y = y0 + j * cell
-            zb, sax = cylinder_underside(cx, cy, cz, a0, a1, a2, r, x, y)
-            if not (zb == zb) or abs(sax) > 0.5 * L:
-                continue
             s_p, s_y = node_state(tile_of, plastic, yield_p, i, j)
-            if zb >= base - s_p:
-                continue                     # above the (rutted) surface
+            hb = node_base(grid, base_z, i, j)
+            m0, m1, m2 = 0.0, 0.0, 1.0
+            if plane:                        # the vertical through the node
+                px, py = x, y
+                zb, sax = cylinder_underside(cx, cy, cz, a0, a1, a2, r, x, y)
+                if not (zb == zb) or abs(sax) > 0.5 * L:
+                    continue
+                top = hb - s_p
+                if zb >= top:
+                    continue                 # above the (rutted) surface
+                sink, depth = hb - zb, top - zb
+            else:                            # the line along the base normal through the node's surface point
+                m0, m1, m2 = node_normal(grid, base_z, i, j)
+                t, sax = cylinder_along_normal(cx, cy, cz, a0, a1, a2, r, x, y, hb, m0, m1, m2)
+                if not (t == t) or abs(sax) > 0.5 * L:
+                    continue
+                sink, depth = -t, -t - m2 * s_p       # the rut is s_p deep vertically, N_z s_p along N
+                if depth <= 0.0:
+                    continue
+                px, py, zb = x + t * m0, y + t * m1, hb + t * m2
             if m >= scratch.shape[0]:
                 break
             # outward radial unit n_c at the contact point; arc coordinate u = r·atan2(n·e_side, n·e_down)
-            n0 = (x - cx - sax * a0) / r
-            n1 = (y - cy - sax * a1) / r
+            n0 = (px - cx - sax * a0) / r
+            n1 = (py - cy - sax * a1) / r
             n2 = (zb - cz - sax * a2) / r
             u = r * math.atan2(n0 * sd0 + n1 * sd1 + n2 * sd2, n0 * dn0 + n1 * dn1 + n2 * dn2)
             scratch[m, _I], scratch[m, _J], scratch[m, _ZB] = i, j, zb
+            scratch[m, _PX], scratch[m, _PY], scratch[m, _SINK] = px, py, sink
             scratch[m, _SAX], scratch[m, _U] = sax, u
+            scratch[m, _N0], scratch[m, _N1], scratch[m, _N2] = m0, m1, m2
             s_lo, s_hi = min(s_lo, sax), max(s_hi, sax)
-            pen = max(pen, base - s_p - zb)
+            pen = max(pen, depth)
             m += 1
     return m, s_lo, s_hi, pen
 
 
+@njit(cache=True, inline="always")
+def soil_top(grid, base_z, x, y, reach):
+    """An upper bound (m) of the virgin surface within ``reach`` m of (x, y): the base there plus its slope
+    bound times the reach (the base itself on a plane)."""
+    return base_height(grid, base_z, x, y) + grid[GSLOPE] * reach
+
+
+@njit(cache=True, inline="always")
+def add_normal_damping(D, k, n0, n1, n2):
+    """D −= k N Nᵀ: SCM's damping along the base normal (k = R A, N·s/m)."""
+    n = (n0, n1, n2)
+    for a in range(3):
+        for c in range(3):
+            D[a, c] -= k * n[a] * n[c]
+
+
 @njit(cache=True)
-def screw_soil(grid, soil, tile_of, plastic, yield_p, used, rows, geo, mount_R, mount_p, poses, vels, joint_v,
+def screw_soil(grid, base_z, soil, tile_of, plastic, yield_p, used, rows, geo, mount_R, mount_p, poses, vels, joint_v,
                helix_ratio, v_eps, commit, scratch, wrenches, per_screw, totals, jac, d_twist, d_pose, on_link):
     """Every screw against the soil (module docstring; the model: contact.py). Returns the number of
     nodes a commit made flow (0 without ``commit``), −1 when it found the terrain's tile pool full. With
     ``jac``: the screw links' blocks into ``d_twist``, ``d_pose`` (nl, 6, 6), the links with one marked in
     ``on_link`` (the blocks of links marked before are cleared first)."""
     cell = grid[GCELL]
-    area = cell * cell
-    x0, y0, base = grid[GX0], grid[GY0], grid[GBASE]
+    cell_area = cell * cell
     c_coh, tan_phi, kj, damp = soil[SC], soil[STANPHI], soil[SKJ], soil[SDAMP]
     flows = 0
     D = np.zeros((3, 3))
@@ -197,9 +261,10 @@ def screw_soil(grid, soil, tile_of, plastic, yield_p, used, rows, geo, mount_R, 
         per_screw[s, SLIP] = 1.0 - v_axis / v_ideal if abs(v_ideal) > 1e-9 else 0.0
         if abs(a2) > 0.98:
             continue                             # standing on its end: not modelled
-        if cz - r * math.sqrt(1.0 - a2 * a2) - 0.5 * L * abs(a2) > base:
+        if cz - r * math.sqrt(1.0 - a2 * a2) - 0.5 * L * abs(a2) > soil_top(grid, base_z, cx, cy, 0.5 * L + r):
             continue                             # wholly above the virgin surface (ruts only go down)
-        m, s_lo, s_hi, pen = cylinder_nodes(grid, tile_of, plastic, yield_p, cx, cy, cz, a0, a1, a2, r, L, scratch)
+        m, s_lo, s_hi, pen = cylinder_nodes(grid, base_z, tile_of, plastic, yield_p, cx, cy, cz, a0, a1, a2, r, L,
+                                            scratch)
         if m == 0:
             continue
         # the patch: a cylinder pressed ``pen`` into the surface meets it over the chord 2√(2 r pen − pen²)
@@ -217,10 +282,12 @@ def screw_soil(grid, soil, tile_of, plastic, yield_p, used, rows, geo, mount_R, 
         for q in range(m):
             i, j = int(scratch[q, _I]), int(scratch[q, _J])
             zb, sax, u = scratch[q, _ZB], scratch[q, _SAX], scratch[q, _U]
-            X, Y = x0 + i * cell, y0 + j * cell
-            sink = base - zb
+            X, Y, sink = scratch[q, _PX], scratch[q, _PY], scratch[q, _SINK]        # sink: along the normal N
+            N0, N1, ca = scratch[q, _N0], scratch[q, _N1], scratch[q, _N2]
+            area = cell_area / ca             # the soil surface the node's cell stands for, m²
             deepest = max(deepest, sink)
             s_p, s_y = node_state(tile_of, plastic, yield_p, i, j)
+            s_p = ca * s_p
             sigma = pressure(soil, b, sink, s_p, s_y)[0]
             # velocity of the screw's surface at the contact point (the soil is at rest)
             rx, ry, rz = X - px, Y - py, zb - pz
@@ -230,9 +297,9 @@ def screw_soil(grid, soil, tile_of, plastic, yield_p, used, rows, geo, mount_R, 
             v0 = vpx + w0 + omega * sp0
             v1 = vpy + w1 + omega * sp1
             v2 = vpz + w2 + omega * sp2
-            # SCM's vertical damping (sinking adds): on the envelope's motion, not the spin (a turning
+            # SCM's damping along N (sinking adds): on the envelope's motion, not the spin (a turning
             # cylinder's surface moves up and down but its shape in the soil does not)
-            sig = max(0.0, sigma - damp * (vpz + w2))
+            sig = max(0.0, sigma - damp * (N0 * (vpx + w0) + N1 * (vpy + w1) + ca * (vpz + w2)))
             fn = sig * area
             # thread directions on the envelope: e_θ = a × n_c, across the thread e_x, along it e_h
             n0, n1, n2 = (q0 - sax * a0) / r, (q1 - sax * a1) / r, (q2 - sax * a2) / r
@@ -251,9 +318,9 @@ def screw_soil(grid, soil, tile_of, plastic, yield_p, used, rows, geo, mount_R, 
             tau_h = helix_ratio * tau_max * (1.0 - math.exp(-ell / kj)) * vh / rh
             sc = -tau_c * area * (1.0 if vc > 0.0 else -1.0 if vc < 0.0 else 0.0)
             sh = -tau_h * area
-            f0 = sc * ex0 + sh * eh0
-            f1 = sc * ex1 + sh * eh1
-            f2 = fn + sc * ex2 + sh * eh2
+            f0 = fn * N0 + sc * ex0 + sh * eh0
+            f1 = fn * N1 + sc * ex1 + sh * eh1
+            f2 = fn * ca + sc * ex2 + sh * eh2
             fx += f0
             fy += f1
             fz += f2
@@ -273,20 +340,21 @@ def screw_soil(grid, soil, tile_of, plastic, yield_p, used, rows, geo, mount_R, 
                     for c in range(3):
                         D[a, c] = dcx * ex[a] * ex[c] + dch * ex[a] * eh[c] + dhh * eh[a] * eh[c]
                 if sig > 0.0:
-                    D[2, 2] -= damp * area
+                    add_normal_damping(D, damp * area, N0, N1, ca)
                 rc[0], rc[1], rc[2] = X - ox, Y - oy, zb - oz
                 add_lever_quadratic(rc, D, d_twist[sr])
                 if sig > 0.0 and sink > s_p:
                     # σ' on the branch pressure() took: elastic (K_e (s − s_p)) or Bekker's (n σ / s)
                     dsig = soil[SKE] if sigma == soil[SKE] * (sink - s_p) else soil[SN] * sigma / sink
                     k_sh = tan_phi / tau_max
-                    gk[0], gk[1], gk[2] = (sc * ex0 + sh * eh0) * k_sh, (sc * ex1 + sh * eh1) * k_sh, \
-                        area + (sc * ex2 + sh * eh2) * k_sh
-                    mk[2] = -dsig
+                    gk[0] = area * N0 + (sc * ex0 + sh * eh0) * k_sh
+                    gk[1] = area * N1 + (sc * ex1 + sh * eh1) * k_sh
+                    gk[2] = area * ca + (sc * ex2 + sh * eh2) * k_sh
+                    mk[0], mk[1], mk[2] = -dsig * N0, -dsig * N1, -dsig * ca     # ∂s/∂p = −N
                     add_lever_rank1(rc, gk, mk, d_pose[sr])
                 on_link[sr] = True
             if commit:
-                f = commit_node(grid, soil, tile_of, plastic, yield_p, used, i, j, sink, b)
+                f = commit_node(grid, soil, tile_of, plastic, yield_p, used, i, j, sink, b, ca)
                 if f < 0:
                     return -1
                 flows += f
@@ -305,6 +373,7 @@ def screw_soil(grid, soil, tile_of, plastic, yield_p, used, rows, geo, mount_R, 
 
 
 def scratch_rows(radius: np.ndarray, length: np.ndarray, cell: float) -> int:
-    """Nodes a screw's footprint box can hold at any orientation: ((L + 2r)/cell + 2)²."""
-    side = float(np.max(length + 2.0 * radius)) / cell + 2.0
+    """Nodes a screw's footprint box can hold at any orientation: ((L + 4r)/cell + 2)² (2r more than the
+    cylinder for the lean of the normal lines on a sloped base)."""
+    side = float(np.max(length + 4.0 * radius)) / cell + 2.0
     return int(side * side) + 1

@@ -36,8 +36,8 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from snakesim.components.terrain.deformable_kernels import (GBASE, GCELL, GNX, GNY, GX0, GY0, SC, SKJ, STANPHI,
-                                                           commit_node, node_state, pressure)
+from snakesim.components.terrain.deformable_kernels import (GBASE, GCELL, GDRES, GNX, GNY, GX0, GY0, SC, SKJ,
+                                                           STANPHI, commit_node, node_state, pressure)
 
 # ``out`` columns: drawbar pull N (along the heading), vertical load N, driving torque N·m, contact nodes, θ1 rad
 DP, LOAD, TORQUE, NODES, THETA1 = range(5)
@@ -111,7 +111,7 @@ def wheel_soil(grid, soil, tile_of, plastic, yield_p, used, cx, cy, cz, heading,
             out[TORQUE] += tau * r * aw / math.cos(th)
             out[NODES] += 1.0
             if commit and s > s_p:
-                f = commit_node(grid, soil, tile_of, plastic, yield_p, used, i, j, s, b)
+                f = commit_node(grid, soil, tile_of, plastic, yield_p, used, i, j, s, b, 1.0)
                 if f < 0:
                     return -1
                 flows += f
@@ -123,6 +123,9 @@ def wheel_forces(terrain, wheel: RigidWheel, centre, heading: float, slip: float
     """The wheel at ``centre`` (m, world) heading ``heading`` (rad) at slip ``slip`` on ``terrain`` (a
     DeformableTerrain): a dict of drawbar pull (N), vertical load (N), driving torque (N·m), contact nodes and
     the entry angle θ1 (rad); with ``commit`` the rut is pressed (and the terrain's version bumped)."""
+    if terrain.grid[GDRES] != 0.0:
+        raise ValueError(f"terrain '{terrain.source}': the rigid wheel (Wong–Reece) is for level ground; this "
+                         f"soil lies on a height-field base")
     st = terrain.state
     out = np.zeros(5)
     flows = wheel_soil(terrain.grid, terrain.soil, st.tile_of, st.plastic, st.yield_p, st.used, float(centre[0]),

@@ -22,7 +22,7 @@ import pytest
 
 from snakesim.components.terrain.deformable import DeformableTerrain
 from snakesim.components.terramechanics.body_kernels import L_NODES, L_NORMAL, L_SINKAGE, body_soil
-from snakesim.components.terramechanics.kernels import scratch_rows
+from snakesim.components.terramechanics.kernels import SCRATCH_COLUMNS, scratch_rows
 
 from test_rigid_wheel import SAND
 
@@ -44,18 +44,19 @@ def reference(n=2001):
     return float(sigma.sum() * dy * L), float(-(tau_max * dy).sum() * along), float((tau_max * dy).sum() * L), chord
 
 
-def kernel(across=1.0, v=(0.5, 0.0, 0.0), yaw=0.0, soil=SAND, cell=CELL, v_eps=1e-6, pose=None, blocks=False):
-    t = DeformableTerrain(0.0, (-0.5, -0.5), (1.0, 1.0), cell, soil, max_tiles=64)
+def kernel(across=1.0, v=(0.5, 0.0, 0.0), yaw=0.0, soil=SAND, cell=CELL, v_eps=1e-6, pose=None, blocks=False,
+           terrain=None):
+    t = terrain or DeformableTerrain(0.0, (-0.5, -0.5), (1.0, 1.0), cell, soil, max_tiles=64)
     st = t.state
     # the cylinder along the link's x: its frame's z axis (the URDF cylinder's) turned onto x
     piece_R = np.array([[[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]]])
     q = np.array([0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2)])
     poses = np.array([[0.0003, -0.0004, R - PEN, *q]]) if pose is None else np.asarray(pose, float)[None]
     vels = np.array([[*v, 0.0, 0.0, 0.0]]) if len(v) == 3 else np.asarray(v, float)[None]
-    scratch = np.zeros((scratch_rows(np.array([R]), np.array([L]), cell), 5))
+    scratch = np.zeros((scratch_rows(np.array([R]), np.array([L]), cell), SCRATCH_COLUMNS))
     w, per_link, totals = np.zeros((1, 6)), np.zeros((1, 3)), np.zeros(2)
     d_twist, d_pose, on = np.zeros((1, 6, 6)), np.zeros((1, 6, 6)), np.zeros(1, dtype=np.bool_)
-    body_soil(t.grid, t.soil, st.tile_of, st.plastic, st.yield_p, st.used, np.array([0]),
+    body_soil(t.grid, t.base_z, t.soil, st.tile_of, st.plastic, st.yield_p, st.used, np.array([0]),
               np.array([[R, L, 1.0, across]]), piece_R, np.zeros((1, 3)), poses, vels, v_eps, False, scratch, w,
               per_link, totals, blocks, d_twist, d_pose, on)
     return (w[0], per_link[0], d_twist[0], d_pose[0]) if blocks else (w[0], per_link[0])

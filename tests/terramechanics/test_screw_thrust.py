@@ -29,7 +29,8 @@ import numpy as np
 import pytest
 
 from snakesim.components.terrain.deformable import DeformableTerrain, SoilSpec
-from snakesim.components.terramechanics.kernels import SINKAGE, SLIP, THRUST, scratch_rows, screw_soil
+from snakesim.components.terramechanics.kernels import (SCRATCH_COLUMNS, SINKAGE, SLIP, THRUST, scratch_rows,
+                                                        screw_soil)
 
 SNOW = SoilSpec(k_c=4.37e3, k_phi=196.72e3, n=1.6, cohesion=1.03e3, friction_angle=19.7, janosi_k=0.025,
                 elastic_k=5.0e5)
@@ -64,21 +65,21 @@ def reference_thrust(slip, soil=SNOW, n=801):
     return float(per_y.sum() * (chord / n) * L), float(np.abs(per_y).sum() * (chord / n) * L), chord
 
 
-def soil_call(vels, soil=SNOW, cell=CELL, v_eps=1e-9, poses=None):
+def soil_call(vels, soil=SNOW, cell=CELL, v_eps=1e-9, poses=None, terrain=None):
     """The contact kernel for the docstring's screw (link 0, its own spin's parent) on a terrain of ``cell``
-    nodes: (wrenches, per_screw, d_twist, d_pose)."""
-    t = DeformableTerrain(0.0, (-1.0, -1.0), (2.0, 2.0), cell, soil, max_tiles=1)
+    nodes (or ``terrain``): (wrenches, per_screw, d_twist, d_pose)."""
+    t = terrain or DeformableTerrain(0.0, (-1.0, -1.0), (2.0, 2.0), cell, soil, max_tiles=1)
     rows = np.array([[0, 0, 0]], dtype=np.int64)
     geo = np.array([[R, L, LEAD, 1.0, 1.0]])
     mount_R, mount_p = np.eye(3)[None].copy(), np.zeros((1, 3))
     if poses is None:
         poses = np.array([[0.0, 0.0, R - PEN, 0.0, 0.0, 0.0, 1.0]])
     st = t.state
-    scratch = np.zeros((scratch_rows(np.array([R]), np.array([L]), cell), 5))
+    scratch = np.zeros((scratch_rows(np.array([R]), np.array([L]), cell), SCRATCH_COLUMNS))
     wrenches, per_screw, totals = np.zeros((1, 6)), np.zeros((1, 5)), np.zeros(2)
     d_twist, d_pose, on = np.zeros((1, 6, 6)), np.zeros((1, 6, 6)), np.zeros(1, dtype=np.bool_)
-    screw_soil(t.grid, t.soil, st.tile_of, st.plastic, st.yield_p, st.used, rows, geo, mount_R, mount_p, poses,
-               np.asarray(vels, dtype=float), np.array([OMEGA]), RATIO, v_eps, False, scratch, wrenches, per_screw,
+    screw_soil(t.grid, t.base_z, t.soil, st.tile_of, st.plastic, st.yield_p, st.used, rows, geo, mount_R, mount_p,
+               poses, np.asarray(vels, dtype=float), np.array([OMEGA]), RATIO, v_eps, False, scratch, wrenches, per_screw,
                totals, True, d_twist, d_pose, on)
     return wrenches[0], per_screw[0], d_twist[0], d_pose[0]
 
