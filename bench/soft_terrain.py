@@ -22,7 +22,8 @@
    then the drawbar pull and the driving torque (tests/terramechanics/test_rigid_wheel.py checks the same
    against Wong's integrals).
 6. Shape gaits on soil (soil_body_contact): mini-eels-sand-crawl and regolith-sidewinding at their own
-   settings (--quick: 5 s, else 20 s): the centre of mass's displacement, the rut and the real-time factor.
+   settings (--quick: 5 s, else 20 s), each with its shipped skin, Mohr–Coulomb alone and the rut walls'
+   passive pressure: the centre of mass's displacement, the rut and the real-time factor.
 
 Writes bench/results/soft_terrain.json and bench/results/soft_terrain.png (or the given files). --quick:
 fewer points and shorter runs (under a minute on 2 shared cores).
@@ -245,16 +246,21 @@ def wheel(quick: bool) -> dict:
 
 # -- 6. shape gaits on soil ------------------------------------------------------------------------------------
 def shape_gaits(quick: bool) -> list[dict]:
+    """Each gait scene with its own lateral resistance (the ``skin`` it ships with), with Mohr–Coulomb alone
+    (skin 1, 1) and with the rut walls' passive pressure instead of a fitted factor (skin 1, 1 + rut_walls)."""
+    variants = {"own skin": [], "skin 1, 1": ["skin.across=1.0"], "rut walls": ["skin.across=1.0", "rut_walls=true"]}
     rows = []
     for scene in ("mini-eels-sand-crawl", "regolith-sidewinding"):
-        s = load_session(scene, sim_overrides={"duration": 5.0 if quick else 20.0})
-        r = s.run()
-        com = r["robot.com"]
-        rep = r.summary["reports"]["contact"]
-        rows.append({"scene": scene, "duration_s": r.summary["sim_time_s"], "outcome": r.summary["outcome"],
-                     "real_time_factor": r.summary["real_time_factor"],
-                     "com_displacement_m": float(np.hypot(*(com[-1, :2] - com[0, :2]))),
-                     "max_sinkage_m": rep["max_sinkage_m"], "rut": rep["rut"]})
+        for label, overrides in variants.items():
+            s = load_session(scene, overrides=overrides, sim_overrides={"duration": 5.0 if quick else 20.0})
+            r = s.run()
+            com = r["robot.com"]
+            rep = r.summary["reports"]["contact"]
+            rows.append({"scene": scene, "lateral": label, "duration_s": r.summary["sim_time_s"],
+                         "outcome": r.summary["outcome"], "real_time_factor": r.summary["real_time_factor"],
+                         "com_displacement_m": float(np.hypot(*(com[-1, :2] - com[0, :2]))),
+                         "com_dx_m": float(com[-1, 0] - com[0, 0]), "max_sinkage_m": rep["max_sinkage_m"],
+                         "rut": rep["rut"]})
     return rows
 
 
@@ -288,10 +294,11 @@ def table(out: dict) -> str:
               f"(cell {wl['cell_m']} m)", "   slip   sinkage cm   drawbar N   DP/W    torque N·m"]
     lines += [f"   {r['slip']:4.2f}  {100 * r['sinkage_m']:9.2f}  {r['drawbar_pull_N']:10.1f}  "
               f"{r['drawbar_pull_N'] / wl['load_N']:6.3f}  {r['torque_Nm']:9.1f}" for r in wl["rows"]]
-    lines += ["6. shape gaits on soil", "   scene                    s     CoM moved m   max sink cm   rut nodes   RTF   outcome"]
-    lines += [f"   {r['scene']:24s} {r['duration_s']:4.0f}  {r['com_displacement_m']:10.3f}  "
-              f"{100 * r['max_sinkage_m']:11.2f}  {r['rut']['deformed_nodes']:9d}  {r['real_time_factor']:5.1f}  "
-              f"{r['outcome']}" for r in out["shape_gaits"]]
+    lines += ["6. shape gaits on soil (lateral resistance: the scene's skin, Mohr–Coulomb alone, the rut walls)",
+              "   scene                    lateral     s     CoM moved m   dx m     max sink cm   rut nodes   RTF   outcome"]
+    lines += [f"   {r['scene']:24s} {r['lateral']:10s} {r['duration_s']:4.0f}  {r['com_displacement_m']:10.3f}  "
+              f"{r['com_dx_m']:+7.3f}  {100 * r['max_sinkage_m']:11.2f}  {r['rut']['deformed_nodes']:9d}  "
+              f"{r['real_time_factor']:5.1f}  {r['outcome']}" for r in out["shape_gaits"]]
     return "\n".join(lines)
 
 

@@ -49,7 +49,7 @@ from .spec_models import KindSpec
 
 class SoilSpec(BaseModel):
     """Bekker–Wong, Mohr–Coulomb and Janosi–Hanamoto parameters of one soil (Wong, Theory of Ground
-    Vehicles, ch. 2), plus SCM's elastic unloading stiffness and vertical damping."""
+    Vehicles, ch. 2), plus SCM's elastic unloading stiffness and vertical damping, and its bulk density."""
 
     model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
 
@@ -61,6 +61,8 @@ class SoilSpec(BaseModel):
     janosi_k: float = Field(gt=0, description="m, Janosi–Hanamoto shear deformation modulus K")
     elastic_k: float = Field(gt=0, description="Pa/m, elastic unloading/reloading stiffness per area (SCM)")
     damping: float = Field(0.0, ge=0, description="Pa·s/m, vertical damping per area (SCM's damping_R)")
+    density: float | None = Field(None, gt=0, description="kg/m³, bulk density: the soil's weight in the rut walls' "
+                                                           "passive pressure (soil_body_contact's rut_walls)")
 
     @field_validator("n")
     @classmethod

@@ -2,32 +2,38 @@
 kind ``deformable``), for shape gaits on sand and regolith; screws are terramechanics_contact's.
 
 Model, per collision cylinder (radius r, length L; a link may have several) against the terrain's nodes
-(spacing Δ, area A = Δ² each), as SCM does for any body and with the screws' soil law:
+(spacing Δ), as SCM does for any body and with the screws' soil law (the base's normal N: ẑ on a plane
+base; terrain/deformable_kernels.py):
 
-    contact nodes   those under the cylinder whose unloaded surface (base − s_p) is above its underside z_b
-    normal          σ = min(K_e (s − s_p), (k_c / b + k_φ) sⁿ), s = base − z_b (terrain/deformable_kernels.py),
+    contact nodes   those whose line along N meets the cylinder below the unloaded (rutted) surface
+    normal          σ = min(K_e (s − s_p), (k_c / b + k_φ) sⁿ), s the sinkage along N,
                     b = the smaller of the chord 2√(2 r p − p²) of the deepest penetration p and the contact's
-                    axial extent (+ Δ); F_n = max(0, σ − R v_z) A along +z
+                    axial extent (+ Δ); F_n = max(0, σ − R v_n) A along N, A = Δ² / N_z
     shear           τ = (c + σ tan φ)(1 − e^(−j/K)) A (Mohr–Coulomb, Janosi–Hanamoto) against the node's
-                    horizontal slip velocity u (the link's material point; the soil at rest), regularised
-                    as u / √(|u|² + v_ε²); j = the distance from the patch's upstream edge along the piece
-                    centre's sliding direction (+ Δ/2): the soil under a sliding body has been sheared by
-                    the path since it entered the patch (the steady form of SCM's per-node j = ∫ |u| dt,
-                    Wong's j = i x at full slip)
+                    slip velocity u in the base's tangent plane (the link's material point; the soil at rest),
+                    regularised as u / √(|u|² + v_ε²); j = the distance from the patch's upstream edge along
+                    the piece centre's sliding direction (+ Δ/2): the soil under a sliding body has been
+                    sheared by the path since it entered the patch (the steady form of SCM's per-node
+                    j = ∫ |u| dt, Wong's j = i x at full slip)
     skin            the shear's along- and across-axis parts × ``along`` and ``across`` (1, 1: Mohr–Coulomb
-                    alone). An ``across`` above 1 stands in for what the model lacks: the passive resistance of
-                    the groove's wall, soil pushed sideways (bulldozing), that lets lateral undulation
-                    propel on sand; it is a fitted factor, not a derived one
-    wrench          Σ (F_n ẑ + the shear) at each node, on the link about its origin
+                    alone). An ``across`` above 1 is a fitted stand-in for the groove wall's resistance
+    rut walls       (``rut_walls``) that resistance from a model instead: a link slipping sideways pushes the
+                    rut's wall, Rankine's passive earth pressure over its contact length L_c and depth z (its
+                    deepest sinkage): P = L_c (½ γ z² K_p + 2 c z √K_p), K_p = tan²(45° + φ/2), γ = ρ g (the
+                    soil's ``density``, ``gravity``), against the piece centre's slip across its axis v_a as
+                    −P v_a / √(v_a² + v_ε²), z/3 above the piece's bottom (Rankine 1857; Terzaghi, Theoretical
+                    Soil Mechanics, 1943: a smooth vertical wall, level ground: a lower bound for a rough one)
+    wrench          Σ (F_n N + the shear) at each node (+ the walls' force), on the link about its origin
 
 The loads are committed once per base tick (``check``), never inside the integrator's stages, as the
 screws' (contact.py). Jacobian (``port_jacobian``, body_kernels.py docstring): per link the 6×6 blocks of the
-shear's velocity slope (τ A / v_ε per node near rest, what limits an explicit step) and of the pressure's
-height slope, for linearly implicit integrators (rosenbrock_w), as the screws'.
+shear's and the walls' velocity slopes (τ A / v_ε per node and P / v_ε per piece near rest, what limits an
+explicit step) and of the pressure's height slope, for linearly implicit integrators (rosenbrock_w), as the
+screws'.
 
-Not modelled: shapes other than cylinders (capsules, spheres, boxes are refused by name), bulldozing berms,
-lateral pressure on the rut walls (the ``across`` factor above), the transient build-up of j, a link
-standing on an end.
+Not modelled: shapes other than cylinders (capsules, spheres, boxes are refused by name), bulldozing berms
+(the soil the walls push is not moved), the walls' build-up with displacement (mobilised by the slip's
+velocity), the transient build-up of j, a link standing on an end.
 
 uses robot: RobotModel
 in   link_poses[nl,7], link_velocities[nl,6]   multibody's (world)
@@ -66,6 +72,10 @@ class SoilBodyContactParams(Params):
                                    description="factors on the shear along / across each link's axis (module "
                                                "docstring: across > 1 stands in for the groove wall's resistance)")
     v_eps: float = Field(0.01, gt=0, description="m/s, slip-velocity regularisation of the shear's direction")
+    rut_walls: bool = Field(False, description="the rut walls' passive earth pressure against each link's sideways "
+                                               "slip (Rankine; module docstring); needs the soil's density")
+    gravity: float = Field(9.81, gt=0, description="m/s², the soil's weight γ = ρ g in the rut walls' pressure (the "
+                                                   "scene's gravity)")
 
 
 class BodyPieces:
@@ -108,7 +118,7 @@ class BodyPieces:
 class _Run:
     def __init__(self, nl):
         self.terrain = None
-        self.scratch = None
+        self.scratch = self.walls = None
         self.per_link, self.totals = np.zeros((nl, 3)), np.zeros(2)
         self.commit_wrenches = np.zeros((nl, 6))
         # the Jacobian's evaluation: its own outputs and blocks (body_kernels.py)
@@ -148,6 +158,7 @@ class SoilBodyContact(Component[SoilBodyContactParams]):
                               "terrain use body_contact")
         g = self.pieces
         check_cell(terrain, g.geo[:, 0], g.geo[:, 1], g.names, what="body cylinder")
+        run.walls = self._walls(terrain)
         run.terrain = terrain
         run.scratch = np.zeros((scratch_rows(g.geo[:, 0], g.geo[:, 1], terrain.cell), SCRATCH_COLUMNS))
         return terrain
@@ -158,8 +169,20 @@ class SoilBodyContact(Component[SoilBodyContactParams]):
         per_link, totals = (run.jac_per_link, run.jac_totals) if jac else (run.per_link, run.totals)
         return body_soil(terrain.grid, terrain.base_z, terrain.soil, st.tile_of, st.plastic, st.yield_p, st.used,
                          g.link, g.geo, g.R, g.p, np.ascontiguousarray(poses, dtype=np.float64),
-                         np.ascontiguousarray(vels, dtype=np.float64), self.p.v_eps, commit, run.scratch, wrenches,
-                         per_link, totals, jac, run.d_twist, run.d_pose, run.on_link)
+                         np.ascontiguousarray(vels, dtype=np.float64), self.p.v_eps, run.walls, commit, run.scratch,
+                         wrenches, per_link, totals, jac, run.d_twist, run.d_pose, run.on_link)
+
+    def _walls(self, terrain: DeformableTerrain) -> np.ndarray:
+        """The kernel's [γ N/m³, K_p] of the rut walls (γ = 0: off): Rankine's K_p = tan²(45° + φ/2)."""
+        if not self.p.rut_walls:
+            return np.zeros(2)
+        soil = terrain.soil_spec
+        if soil.density is None:
+            raise ConfigError(f"{self.name}: rut_walls needs the soil's bulk density (kg/m³, the weight in the walls' "
+                              f"passive pressure); give soil.density in the terrain file", terrain.source,
+                              "soil.density")
+        phi = np.radians(soil.friction_angle)
+        return np.array([soil.density * self.p.gravity, np.tan(np.pi / 4 + phi / 2) ** 2])
 
     def output(self, t, x, u, y):
         run = u.cache

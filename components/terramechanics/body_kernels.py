@@ -30,8 +30,8 @@ from numba import njit
 
 from snakesim.components.contact.jacobian_kernels import add_lever_quadratic, add_lever_rank1
 
-from snakesim.components.terrain.deformable_kernels import (GCELL, SC, SDAMP, SKE, SKJ, SN, STANPHI, commit_node,
-                                                           node_state, pressure)
+from snakesim.components.terrain.deformable_kernels import (GCELL, SC, SDAMP, SKE, SKJ, SN, STANPHI, base_normal,
+                                                           commit_node, node_state, pressure)
 
 from .kernels import (_I, _J, _N0, _N1, _N2, _PX, _PY, _SINK, _ZB, add_normal_damping, cross, cylinder_nodes,
                       quat_rotate, soil_top)
@@ -42,10 +42,11 @@ L_NORMAL, L_SINKAGE, L_NODES = range(3)
 
 @njit(cache=True)
 def body_soil(grid, base_z, soil, tile_of, plastic, yield_p, used, piece_link, piece_geo, piece_R, piece_p, poses, vels,
-              v_eps, commit, scratch, wrenches, per_link, totals, jac, d_twist, d_pose, on_link):
-    """Every piece against the soil (module docstring; the model: body_contact.py). Returns the nodes a commit
-    made flow (0 without ``commit``), −1 when the terrain's tile pool is full. With ``jac``: the links' blocks
-    into ``d_twist``, ``d_pose`` (nl, 6, 6), those with one marked in ``on_link`` (cleared first)."""
+              v_eps, walls, commit, scratch, wrenches, per_link, totals, jac, d_twist, d_pose, on_link):
+    """Every piece against the soil (module docstring; the model: body_contact.py). ``walls`` [γ N/m³, K_p]:
+    the rut walls' passive pressure (γ = 0: off; ``rut_wall``). Returns the nodes a commit made flow (0
+    without ``commit``), −1 when the terrain's tile pool is full. With ``jac``: the links' blocks into
+    ``d_twist``, ``d_pose`` (nl, 6, 6), those with one marked in ``on_link`` (cleared first)."""
     cell = grid[GCELL]
     cell_area = cell * cell
     c_coh, tan_phi, kj, damp = soil[SC], soil[STANPHI], soil[SKJ], soil[SDAMP]
@@ -173,9 +174,57 @@ def body_soil(grid, base_z, soil, tile_of, plastic, yield_p, used, piece_link, p
         wrenches[row, 3] += tx
         wrenches[row, 4] += ty
         wrenches[row, 5] += tz
+        if walls[0] > 0.0:
+            rut_wall(grid, base_z, soil, walls, cx, cy, m0, m1, m2, a0, a1, a2, r, deepest, s_hi - s_lo + cell,
+                     vx, vy, vz, wx, wy, wz, v_eps, wrenches[row], jac, D, rc, d_twist[row])
         per_link[row, L_NORMAL] += fnormal
         per_link[row, L_SINKAGE] = max(per_link[row, L_SINKAGE], deepest)
         per_link[row, L_NODES] += m
         totals[0] += fnormal
         totals[1] += m
     return flows
+
+
+@njit(cache=True)
+def rut_wall(grid, base_z, soil, walls, cx, cy, m0, m1, m2, a0, a1, a2, r, z, length, vx, vy, vz, wx, wy, wz,
+             v_eps, wrench, jac, D, rc, d_twist):
+    """The rut walls' passive resistance on one piece (body_contact.py, "rut walls"): Rankine's passive force
+    over the piece's contact length ``length`` and depth ``z`` (m, its deepest sinkage along N),
+    P = L (½ γ z² K_p + 2 c z √K_p), against the piece centre's slip across its axis in the base's tangent
+    plane, v_a: −P v_a / √(v_a² + v_ε²) along the across direction e = N × ĥ, applied z/3 above the piece's
+    bottom (the resultant's depth of the weight's triangular part). (cx, cy) is the centre, m = centre −
+    link origin (world). Adds to ``wrench`` (about the link origin) and, with ``jac``, the velocity slope
+    −P v_ε² / ρ³ e eᵀ to ``d_twist``; P's dependence on the depth is left out."""
+    gamma, kp = walls[0], walls[1]
+    p_wall = length * (0.5 * gamma * z * z * kp + 2.0 * soil[SC] * z * math.sqrt(kp))
+    if p_wall <= 0.0:
+        return
+    n0, n1, n2 = base_normal(grid, base_z, cx, cy)
+    # the axis in the tangent plane, ĥ, and across it, e = N × ĥ
+    ad = a0 * n0 + a1 * n1 + a2 * n2
+    h0, h1, h2 = a0 - ad * n0, a1 - ad * n1, a2 - ad * n2
+    hl = math.sqrt(h0 * h0 + h1 * h1 + h2 * h2)
+    h0, h1, h2 = h0 / hl, h1 / hl, h2 / hl
+    e0, e1, e2 = cross(n0, n1, n2, h0, h1, h2)
+    w0, w1, w2 = cross(wx, wy, wz, m0, m1, m2)
+    va = (vx + w0) * e0 + (vy + w1) * e1 + (vz + w2) * e2
+    rho = math.sqrt(va * va + v_eps * v_eps)
+    f = -p_wall * va / rho
+    # where it acts: below the centre, z/3 above the piece's bottom
+    depth = r - z / 3.0
+    q0, q1, q2 = m0 - depth * n0, m1 - depth * n1, m2 - depth * n2
+    wrench[0] += f * e0
+    wrench[1] += f * e1
+    wrench[2] += f * e2
+    t0, t1, t2 = cross(q0, q1, q2, f * e0, f * e1, f * e2)
+    wrench[3] += t0
+    wrench[4] += t1
+    wrench[5] += t2
+    if jac:
+        k = -p_wall * v_eps * v_eps / (rho * rho * rho)
+        ev = (e0, e1, e2)
+        for i in range(3):
+            for j in range(3):
+                D[i, j] = k * ev[i] * ev[j]
+        rc[0], rc[1], rc[2] = q0, q1, q2
+        add_lever_quadratic(rc, D, d_twist)

@@ -1,16 +1,17 @@
 """Terramechanics contact: the robot's screws on a deformable soil (terrain kind ``deformable``).
 
 Model, per screw (envelope cylinder of radius r, length L, lead angle λ, hand h; robot_screws.py) against
-the terrain's nodes (spacing Δ, area A = Δ² each), as Chrono's SCM does for its bodies:
+the terrain's nodes (spacing Δ), as Chrono's SCM does for its bodies, along the base's normal N (ẑ on a plane
+base, vertical lines and A = Δ²; terrain/deformable_kernels.py):
 
-    contact nodes   those under the screw whose unloaded surface (base − s_p) is above the screw's
-                    underside z_b there (the vertical line through the node meets the cylinder)
-    sinkage         s = base − z_b (below the virgin surface)
+    contact nodes   those whose line along N from the node's virgin surface point meets the screw below the
+                    unloaded (rutted) surface
+    sinkage         s = the depth of that meeting point below the virgin surface, along N
     normal          σ = min(K_e (s − s_p), (k_c / b + k_φ) sⁿ)   (Bekker–Wong with SCM's elastic
                     unloading; terrain/deformable_kernels.py), b the patch's smaller side: the chord
                     2√(2 r p − p²) of the deepest penetration p below the unloaded surface, or the
-                    contact's axial extent (+ Δ) if smaller; F_n = max(0, σ − R v_z) A
-                    along +z (R SCM's vertical damping)
+                    contact's axial extent (+ Δ) if smaller; F_n = max(0, σ − R v_n) A along N,
+                    A = Δ² / N_z the soil surface of the node's cell (R SCM's damping)
     shear strength  τ_max = c + σ tan φ                              (Mohr–Coulomb)
     thread          at the contact point, n̂ radial, ê_θ = â × n̂; across the thread
                     ê_x = cos λ â − h sin λ ê_θ, along it ê_h = h sin λ â + cos λ ê_θ; the surface's
@@ -18,12 +19,12 @@ the terrain's nodes (spacing Δ, area A = Δ² each), as Chrono's SCM does for i
     Janosi          across the thread the soil in the groove is sheared by the flanks: j = |v_x| ℓ / |v_h|ε
                     with ℓ the helix path from where the thread entered the patch (ℓ = arc / cos λ, the
                     arc measured round the envelope from the patch's upstream edge at r·acos(1 − p/r)
-                    from the bottom, + Δ/2 for the node's own cell) and |v_h|ε =
+                    from the bottom (towards −N), + Δ/2 for the node's own cell) and |v_h|ε =
                     √(v_h² + v_ε²): the steady form of j = ∫ v_x dt along the helix (Wong's j = i x for a
                     track); τ_x = τ_max (1 − e^(−j/K)) against v_x
                     along the thread the soil slides on the screw's skin: τ_h = helix_shear_ratio τ_max
                     (1 − e^(−ℓ/K)) against v_h (regularised by v_ε)
-    wrench          Σ (F_n ẑ − τ_x A sgn(v_x) ê_x − τ_h A ê_h) at each node, on the screw link about its
+    wrench          Σ (F_n N − τ_x A sgn(v_x) ê_x − τ_h A ê_h) at each node, on the screw link about its
                     origin: the across-thread shear is the thrust along â; its moment about â loads the spin
 
 An ideal screw (a nut in the soil) advances at h ω r tan λ: v_x = 0, no shear across the thread; slip
@@ -41,7 +42,8 @@ Report (``report``, summary.json's ``reports.<name>``): per screw the mean and d
 slip while driven, and the rut (terrain/deformable_files.py's ``rut_summary``).
 
 Not modelled here: body links (soil_body_contact, body_contact.py, with ``exclude_screws: true``; a scene with
-both sums their wrenches with wrench_sum), bulldozing and soil flow, lateral pressure on the rut walls, screws
+both sums their wrenches with wrench_sum), bulldozing and soil flow, lateral pressure on the rut walls (the
+body contact's rut_walls; a screw's flanks already shear the groove), screws
 standing on an end, a screw outside the terrain's patch (the base there is rigid and not sampled: keep the run
 inside the patch), the transient build-up of j (the steady helix form above).
 

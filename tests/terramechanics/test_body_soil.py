@@ -45,7 +45,7 @@ def reference(n=2001):
 
 
 def kernel(across=1.0, v=(0.5, 0.0, 0.0), yaw=0.0, soil=SAND, cell=CELL, v_eps=1e-6, pose=None, blocks=False,
-           terrain=None):
+           terrain=None, walls=(0.0, 0.0)):
     t = terrain or DeformableTerrain(0.0, (-0.5, -0.5), (1.0, 1.0), cell, soil, max_tiles=64)
     st = t.state
     # the cylinder along the link's x: its frame's z axis (the URDF cylinder's) turned onto x
@@ -57,8 +57,8 @@ def kernel(across=1.0, v=(0.5, 0.0, 0.0), yaw=0.0, soil=SAND, cell=CELL, v_eps=1
     w, per_link, totals = np.zeros((1, 6)), np.zeros((1, 3)), np.zeros(2)
     d_twist, d_pose, on = np.zeros((1, 6, 6)), np.zeros((1, 6, 6)), np.zeros(1, dtype=np.bool_)
     body_soil(t.grid, t.base_z, t.soil, st.tile_of, st.plastic, st.yield_p, st.used, np.array([0]),
-              np.array([[R, L, 1.0, across]]), piece_R, np.zeros((1, 3)), poses, vels, v_eps, False, scratch, w,
-              per_link, totals, blocks, d_twist, d_pose, on)
+              np.array([[R, L, 1.0, across]]), piece_R, np.zeros((1, 3)), poses, vels, v_eps, np.asarray(walls, float),
+              False, scratch, w, per_link, totals, blocks, d_twist, d_pose, on)
     return (w[0], per_link[0], d_twist[0], d_pose[0]) if blocks else (w[0], per_link[0])
 
 
