@@ -22,7 +22,7 @@ from snakesim.framework.yaml_source import load_yaml
 from . import mesh
 from .base import Terrain
 from .builtin_kinds import builtin_terrain_kinds  # noqa: F401  (re-exported)
-from .includes import expand_materials
+from .includes import expand_includes, expand_materials
 from .lookup import available_terrains, resolve_terrain, terrain_dir  # noqa: F401  (re-exported)
 from .spec_models import (BoxSpec, CrossSectionSpec, DemSpec, FractalSpec, KeepClearSpec, KindSpec,  # noqa: F401
                           MeshSpec, MoulinSpec, ObstaclesSpec, PlaneSpec, Positive, RandomObstaclesSpec, RoughnessSpec,
@@ -64,8 +64,10 @@ def validate_spec(data, source: str = "<terrain>", base_dir: Path | None = None,
         except Exception as e:                            # noqa: BLE001 -- RegistryError
             raise ConfigError(str(e), where_in(data, ["kind"]) or source, "kind") from None
     spec_of_kind = {name: k.spec for name, k in kinds.items()}
+    folder = Path(".") if base_dir is None else Path(base_dir)
+    data = expand_includes(data, folder, source)
     data_in = data
-    data = expand_materials(data, Path(".") if base_dir is None else Path(base_dir), source)
+    data = expand_materials(data, folder, source)
     try:
         return _adapter(kinds).validate_python(dict(data))
     except ValidationError as e:

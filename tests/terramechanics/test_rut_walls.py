@@ -83,10 +83,15 @@ def test_rut_walls_without_a_density_are_refused_naming_the_key(tmp_path):
 def _without_density(tmp_path):
     from pathlib import Path
 
-    text = (Path(__file__).parents[2] / "terrains" / "sand-field.yaml").read_text()
-    lines = [ln for ln in text.splitlines() if not ln.strip().startswith("density:")]
+    terrains = Path(__file__).parents[2] / "terrains"
+    soil = (terrains / "soils" / "dry-sand-lll.yaml").read_text()
+    (tmp_path / "soils").mkdir()
+    (tmp_path / "soils" / "sand.yaml").write_text(
+        "\n".join(ln for ln in soil.splitlines() if not ln.startswith("density:")) + "\n")
+    field = (terrains / "sand-field.yaml").read_text()
+    assert "soils/dry-sand-lll.yaml" in field
     path = tmp_path / "no-density.yaml"
-    path.write_text("\n".join(lines) + "\n")
+    path.write_text(field.replace("soils/dry-sand-lll.yaml", "soils/sand.yaml"))
     return path
 
 

@@ -108,20 +108,45 @@ def test_rerun_is_bit_identical():
         assert np.array_equal(outs[0][k], outs[1][k])
 
 
-BAD = [("n: 1.6", "n: 0.0", "soil.n"),
-       ("friction_angle: 19.7", "friction_angle: 95.0", "soil.friction_angle"),
-       ("k_c: 4.37e3", "k_c: -1.0e5", "soil")]
+# (old, new, key, the file named): a value bad in itself is named in the soil's file; k_c + k_φ·b > 0 is a
+# check against the terrain's cell and size, named at the terrain file's soil key with both values
+BAD = [("n: 1.6", "n: 0.0", "n", "bad-snow.yaml"),
+       ("friction_angle: 19.7", "friction_angle: 95.0", "friction_angle", "bad-snow.yaml"),
+       ("k_c: 4.37e3", "k_c: -1.0e5", "k_c", "snow.yaml")]
+TERRAINS = Path(__file__).parents[2] / "terrains"
 
 
-@pytest.mark.parametrize("old,new,key", BAD)
-def test_bad_soil_names_file_and_key(tmp_path, old, new, key):
+@pytest.mark.parametrize("old,new,key,named", BAD)
+def test_bad_soil_names_file_and_key(tmp_path, old, new, key, named):
+    """The snow field's soil is an included file (soils/snow-us.yaml): a bad value in it is named with that
+    file and the key; the same value inline in a terrain file, with the terrain file and soil.<key>."""
     from snakesim.framework.errors import SnakesimError
 
-    text = (Path(__file__).parents[2] / "terrains" / "snow-field.yaml").read_text()
-    assert old in text
-    path = tmp_path / "bad-snow.yaml"
-    path.write_text(text.replace(old, new))
+    soil = (TERRAINS / "soils" / "snow-us.yaml").read_text()
+    assert old in soil
+    (tmp_path / "soils").mkdir()
+    (tmp_path / "soils" / "bad-snow.yaml").write_text(soil.replace(old, new))
+    field = (TERRAINS / "snow-field.yaml").read_text()
+    assert "soils/snow-us.yaml" in field
+    (tmp_path / "snow.yaml").write_text(field.replace("soils/snow-us.yaml", "soils/bad-snow.yaml"))
     with pytest.raises(SnakesimError) as e:
-        load_terrain(str(path))
+        load_terrain(str(tmp_path / "snow.yaml"))
     msg = str(e.value)
-    assert "bad-snow.yaml" in msg and key in msg
+    assert named in msg and key in msg
+    inline = "\n".join("  " + ln for ln in soil.replace(old, new).splitlines() if ln and not ln.startswith("#"))
+    (tmp_path / "inline.yaml").write_text(field.replace("soil: {include: soils/snow-us.yaml}", "soil:\n" + inline))
+    with pytest.raises(SnakesimError) as e:
+        load_terrain(str(tmp_path / "inline.yaml"))
+    msg = str(e.value)
+    assert "inline.yaml" in msg and ("soil" if key == "k_c" else f"soil.{key}") in msg
+
+
+def test_a_missing_soil_include_names_the_key_and_the_path(tmp_path):
+    from snakesim.framework.errors import SnakesimError
+
+    field = (TERRAINS / "snow-field.yaml").read_text()
+    (tmp_path / "snow.yaml").write_text(field.replace("soils/snow-us.yaml", "soils/no-such-soil.yaml"))
+    with pytest.raises(SnakesimError) as e:
+        load_terrain(str(tmp_path / "snow.yaml"))
+    msg = str(e.value)
+    assert "snow.yaml" in msg and "soil.include" in msg and "no-such-soil.yaml" in msg
