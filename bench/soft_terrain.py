@@ -13,7 +13,8 @@
    settings; the tail's mean speed along the crescent's chord (+x) over the phase's last half.
 3. Cost per step against the snow grid's cell: snow-screw-traverse for a few seconds with the snow field's
    cell set to each value (its own settings: rosenbrock_w, 20 ms); wall time per step and real-time factor;
-   and the same snow on a DEM base (terrains/snow-dem.yaml, 2 cm: the law along the ground's normal).
+   and the same snow on a DEM base (terrains/snow-dem.yaml, 2 cm: the law along the ground's normal) and
+   with bulldozing (berms heaped and eroded, terrain/bulldozing.py).
 4. The whole schedule (45 s; --quick: the settle and the forward phase, 9 s) on snow and on hard ice: the
    distance made good (the tail's displacement) and its path length; the snow run's rut saved beside the
    results (soft_terrain.terrain.npz, components/terrain/deformable_files.py; soft_terrain.rut.png).
@@ -86,6 +87,7 @@ class PairRig:
     def forces(self, depth, slip):
         """(Σ normal force N, Σ axial thrust N) with the envelopes' bottoms ``depth`` m into the snow and
         the pair advancing at (1 − slip) of the ideal nut speed."""
+        from snakesim.components.terramechanics.contact import NO_LOG
         from snakesim.components.terramechanics.kernels import NORMAL, THRUST, screw_soil
 
         z = self.r - depth
@@ -96,8 +98,8 @@ class PairRig:
         w, per, tot = np.zeros((2, 6)), np.zeros((2, 5)), np.zeros(2)
         dt_, dp, on = np.zeros((2, 6, 6)), np.zeros((2, 6, 6)), np.zeros(2, dtype=np.bool_)
         screw_soil(self.terrain.grid, self.terrain.base_z, self.terrain.soil, st.tile_of, st.plastic, st.yield_p,
-                   st.used, self.rows, self.geo, self.mount_R, self.mount_p, poses, vels, self.joint_v, 0.5, 0.01, False,
-                   self.scratch, w, per, tot, False, dt_, dp, on)
+                   st.lift, st.used, self.rows, self.geo, self.mount_R, self.mount_p, poses, vels, self.joint_v, 0.5,
+                   0.01, False, *NO_LOG, self.scratch, w, per, tot, False, dt_, dp, on)
         return per[:, NORMAL].sum(), per[:, THRUST].sum()
 
     def sinkage(self, weight):
@@ -173,7 +175,10 @@ def cost(quick: bool) -> list[dict]:
             path.write_text(text.replace("cell: 0.02", f"cell: {cell}").replace("max_tiles: 1024",
                                                                                   f"max_tiles: {tiles}"))
             rows.append(_cost_row(str(path), cell, "plane", duration))
-    rows.append(_cost_row("snow-dem", 0.02, "dem", duration))
+        rows.append(_cost_row("snow-dem", 0.02, "dem", duration))
+        path = Path(tmp) / "snow-bulldozing.yaml"
+        path.write_text(text + "bulldozing: {erosion_angle: 35.0, flow_factor: 1.0, erosion_iterations: 5}\n")
+        rows.append(_cost_row(str(path), 0.02, "plane, bulldozing", duration))
     return rows
 
 
@@ -277,8 +282,8 @@ def table(out: dict) -> str:
     lines += [f"   {r['scene']:24s} {r['screw_rate_rad_s']:5.1f}  {r['speed_m_s']:7.4f}  {r['real_time_factor']:6.1f}  "
               f"{r['outcome']}" for r in out["speed"]]
     lines += ["3. cost against the snow grid's cell (snow-screw-traverse, its own settings)",
-              "   cell m   base    steps   µs/step   RTF    outcome"]
-    lines += [f"   {r['cell_m']:6.3f}  {r['base']:6s} {r['steps']:6d}  {r['us_per_step']:8.0f}  "
+              "   cell m   base              steps   µs/step   RTF    outcome"]
+    lines += [f"   {r['cell_m']:6.3f}  {r['base']:17s} {r['steps']:6d}  {r['us_per_step']:8.0f}  "
               f"{r['real_time_factor']:5.1f}  {r['outcome']}" for r in out["cost"]]
     lines += ["4. the schedule on snow and on hard ice", "   scene                    s     made good m   path m   RTF   outcome"]
     lines += [f"   {r['scene']:24s} {r['duration_s']:4.0f}  {r['distance_made_good_m']:10.3f}  {r['path_length_m']:7.3f}  "
@@ -327,8 +332,9 @@ def plot(out: dict, path: Path) -> None:
     ax[1].legend()
     c = [r for r in out["cost"] if r["base"] == "plane"]
     ax[2].loglog([r["cell_m"] for r in c], [r["us_per_step"] for r in c], marker="o", label="plane base")
-    d = [r for r in out["cost"] if r["base"] == "dem"]
-    ax[2].loglog([r["cell_m"] for r in d], [r["us_per_step"] for r in d], marker="s", ls="", label="DEM base")
+    for base, marker in (("dem", "s"), ("plane, bulldozing", "^")):
+        d = [r for r in out["cost"] if r["base"] == base]
+        ax[2].loglog([r["cell_m"] for r in d], [r["us_per_step"] for r in d], marker=marker, ls="", label=base)
     ax[2].legend()
     ax[2].set_xlabel("snow grid cell (m)")
     ax[2].set_ylabel("wall µs per 20 ms step")

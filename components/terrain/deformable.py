@@ -30,8 +30,11 @@ sinkage s = cos(slope)·(base − z) (deformable_kernels.py).
 Query: the unloaded surface base − s_p, bilinear between nodes; distance and normal first-order as a
 DEM's (d = (z − h)/√(1 + |∇h|²)). Units SI, world frame, z up.
 
-Not modelled here: soil pushed aside (bulldozing berms; the rut's volume vanishes, as SCM without its
-bulldozing option), lateral soil pressure on the rut walls, soil sliding down a slope of itself.
+Bulldozing (``bulldozing:``, off by default: the rut's volume is compacted, as SCM without its option): the
+soil a step presses out is heaped on the contact patch's rim and eroded to the angle of repose
+(bulldozing.py); berms stand above the virgin surface (plastic < 0).
+
+Not modelled here: soil sliding down a slope of itself (the base's slopes are not eroded).
 """
 
 from __future__ import annotations
@@ -43,6 +46,7 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator, model_valida
 from typing import Literal
 
 from .base import Bounds, Terrain, TerrainMesh, TerrainState
+from .bulldozing import BulldozingSpec
 from .deformable_kernels import TILE, empty_used, query_surface
 from .spec_models import KindSpec
 
@@ -90,6 +94,9 @@ class DeformableSpec(KindSpec):
     cell: float = Field(0.02, gt=0, description="m, node spacing")
     max_tiles: int = Field(2048, ge=1, description="tiles of 32 × 32 nodes a run may touch")
     soil: SoilSpec
+    bulldozing: BulldozingSpec | None = Field(None, description="heap the rut's soil on its rim and erode it to the "
+                                                                "angle of repose (terrain/bulldozing.py); none: the "
+                                                                "rut's volume is compacted")
     initial_state: str | None = Field(None, description="soil_state.npz of an earlier run (terramechanics_contact's "
                                                         "--out file; relative to the terrain file): start on its ruts")
 
@@ -124,15 +131,17 @@ class DeformableTerrain(Terrain):
     lipschitz = 3.0
 
     def __init__(self, base_height: float, origin, size, cell: float, soil: SoilSpec, max_tiles: int = 2048,
-                 source: str = "<deformable terrain>", base_grid=None, **kw):
+                 source: str = "<deformable terrain>", base_grid=None, bulldozing: BulldozingSpec | None = None,
+                 **kw):
         """``base_grid``: (z, spacing, (x0, y0)) of a height-field base (Terrain.height_grid), or None: the
-        plane z = ``base_height``."""
+        plane z = ``base_height``; ``bulldozing``: the rut's soil heaped on its rim (bulldozing.py), or None."""
         nx = int(math.floor(size[0] / cell)) + 1
         ny = int(math.floor(size[1] / cell)) + 1
         ntx, nty = -(-nx // TILE), -(-ny // TILE)
         state = TerrainState(tile_of=np.full((ntx, nty), -1, dtype=np.int64),
                              plastic=np.zeros((max_tiles, TILE, TILE)),
                              yield_p=np.zeros((max_tiles, TILE, TILE)),
+                             lift=np.zeros((max_tiles, TILE, TILE)),
                              used=empty_used(max_tiles))
         super().__init__(state=state, **kw)
         if base_grid is None:
@@ -151,6 +160,7 @@ class DeformableTerrain(Terrain):
         self.cell, self.base_height, self.source = float(cell), float(base_height), source
         self._virgin = np.full_like(state.tile_of, -1)       # a tile table with nothing touched: the base
         self.soil_spec = soil
+        self.bulldozing = bulldozing
         self.soil = np.array([soil.k_c, soil.k_phi, soil.n, soil.cohesion, math.tan(math.radians(soil.friction_angle)),
                               soil.janosi_k, soil.elastic_k, soil.damping], dtype=np.float64)
         self.max_tiles = int(max_tiles)
@@ -164,7 +174,7 @@ class DeformableTerrain(Terrain):
         k = self.tiles_used()
         st = self.state
         return {"tile_of": st.tile_of.copy(), "plastic": st.plastic[:k].copy(), "yield_p": st.yield_p[:k].copy(),
-                "used": st.used.copy()}
+                "lift": st.lift[:k].copy(), "used": st.used.copy()}
 
     def restore(self, snap: dict[str, np.ndarray], t: float | None = None) -> None:
         """Put a :meth:`snapshot` back, in place (bound buffers see it), and bump the version."""
@@ -178,6 +188,8 @@ class DeformableTerrain(Terrain):
         st.plastic[k:] = 0.0
         st.yield_p[:k] = snap["yield_p"]
         st.yield_p[k:] = 0.0
+        st.lift[:k] = snap["lift"]
+        st.lift[k:] = 0.0
         st.used[...] = snap["used"]
         st.changed(t)
 
@@ -188,25 +200,29 @@ class DeformableTerrain(Terrain):
         p = np.zeros((x.size, 3))
         p[:, 0], p[:, 1] = x.ravel(), y.ravel()
         d, n = np.empty(x.size), np.empty((x.size, 3))
-        query_surface(self.grid, self.base_z, self._virgin if virgin else self.state.tile_of, self.state.plastic,
-                      p, d, n)
+        st = self.state
+        query_surface(self.grid, self.base_z, self._virgin if virgin else st.tile_of, st.plastic, st.lift, p, d, n)
         return (-d / n[:, 2]).reshape(x.shape)        # d = (0 − h)/√(1 + |∇h|²), n_z = 1/√(…)
 
     def rut_depth(self, x, y) -> np.ndarray:
-        """Plastic sinkage (m, ≥ 0, vertical) of the unloaded surface at points (x, y): base − h."""
+        """Depth (m, vertical) of the unloaded surface below the base at points (x, y): base − h (the rut's
+        plastic sinkage; negative on a berm bulldozing heaped)."""
         return self.surface_height(x, y, virgin=True) - self.surface_height(x, y)
 
     # -- the Terrain interface ---------------------------------------------------
     def _query(self, p):
         d = np.empty(p.shape[0])
         n = np.empty((p.shape[0], 3))
-        query_surface(self.grid, self.base_z, self.state.tile_of, self.state.plastic, p, d, n)
+        st = self.state
+        query_surface(self.grid, self.base_z, st.tile_of, st.plastic, st.lift, p, d, n)
         return d, n, np.zeros(p.shape[0], dtype=np.int64)
 
     def bounds(self) -> Bounds:
-        # the base extends beyond the patch (rigid there): unbounded in x, y; ruts at most 1 m deep
+        # the base extends beyond the patch (rigid there): unbounded in x, y; ruts at most 1 m deep, berms (with
+        # bulldozing) at most 1 m high
         lo, hi = self.base_range
-        return Bounds(np.array([-np.inf, -np.inf, lo - 1.0]), np.array([np.inf, np.inf, hi]))
+        top = hi + (1.0 if self.bulldozing is not None else 0.0)
+        return Bounds(np.array([-np.inf, -np.inf, lo - 1.0]), np.array([np.inf, np.inf, top]))
 
     def display_mesh(self, center, extent, cell, cutaway) -> TerrainMesh:
         """The surface as it is now (ruts drawn) on a grid of max(cell, terrain cell) over ``extent`` m
@@ -233,7 +249,8 @@ class DeformableTerrain(Terrain):
 def build_deformable(spec: DeformableSpec, context, **kw) -> DeformableTerrain:
     base_grid = None if spec.base is None else _base_grid(spec, context)
     terrain = DeformableTerrain(spec.base_height or 0.0, spec.origin, spec.size, spec.cell, spec.soil,
-                                spec.max_tiles, source=str(context.source), base_grid=base_grid, **kw)
+                                spec.max_tiles, source=str(context.source), base_grid=base_grid,
+                                bulldozing=spec.bulldozing, **kw)
     if spec.initial_state is not None:
         import zipfile
         from pathlib import Path

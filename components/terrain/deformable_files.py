@@ -1,10 +1,11 @@
 """The deformable terrain's state on disk and in pictures: an npz a later run restores, the rut's numbers,
 and a top view of the rut (PNG).
 
-npz layout (``save_state``): ``tile_of`` (tiles x, y) int64 slots, ``plastic`` and ``yield_p`` (used, 32, 32)
-m and Pa of the used tiles, ``used`` [slots given, pool full, capacity], and ``grid`` [x0, y0, cell, base,
+npz layout (``save_state``): ``tile_of`` (tiles x, y) int64 slots, ``plastic``, ``yield_p`` and ``lift`` (used,
+32, 32) m, Pa and m of the used tiles (a file without ``lift``, from before bulldozing, reads as none),
+``used`` [slots given, pool full, capacity], and ``grid`` [x0, y0, cell, base,
 nx, ny] so a reader can tell which terrain it belongs to; ``load_state`` refuses another grid, naming both.
-Heights are base − plastic (deformable_kernels.py).
+Heights are base + lift − plastic (deformable_kernels.py).
 """
 
 from __future__ import annotations
@@ -34,18 +35,27 @@ def load_state(terrain: DeformableTerrain, path, t: float | None = None) -> None
         if not np.array_equal(f["grid"], terrain.grid):
             raise ValueError(f"{path}: saved from a grid {f['grid'].tolist()} (x0, y0, cell, base, nx, ny), not "
                              f"{terrain.source}'s {terrain.grid.tolist()}")
-        terrain.restore({k: f[k] for k in ("tile_of", "plastic", "yield_p", "used")}, t)
+        snap = {k: f[k] for k in ("tile_of", "plastic", "yield_p", "used")}
+        snap["lift"] = f["lift"] if "lift" in f.files else np.zeros_like(snap["plastic"])
+        terrain.restore(snap, t)
 
 
 def rut_summary(terrain: DeformableTerrain) -> dict:
-    """The rut's numbers: deformed nodes, deepest plastic sinkage (m), volume pressed out (m³, Σ s_p Δ²),
-    tiles used of the pool, and the deformed nodes' bounding box (m, world x, y)."""
+    """The rut's numbers: deformed nodes, deepest point below the base (m), volume pressed out (m³, Σ s_p Δ²),
+    tiles used of the pool, and the deformed nodes' bounding box (m, world x, y); with bulldozing also the
+    volume heaped (Σ lift Δ²), the net change of the soil's volume (Σ (lift − s_p) Δ²: 0 when all the pressed
+    soil was heaped, flow_factor 1) and the highest berm above the base (m)."""
     k = terrain.tiles_used()
-    plastic = terrain.state.plastic[:k]
-    on = plastic > 0.0
+    plastic, lift = terrain.state.plastic[:k], terrain.state.lift[:k]
+    on = (plastic > 0.0) | (lift != 0.0)
+    area = terrain.cell ** 2
     out = {"tiles_used": k, "max_tiles": terrain.max_tiles, "deformed_nodes": int(on.sum()),
-           "max_rut_depth_m": float(plastic.max()) if k else 0.0,
-           "rut_volume_m3": float(plastic.sum() * terrain.cell ** 2)}
+           "max_rut_depth_m": float((plastic - lift).max()) if k else 0.0,
+           "rut_volume_m3": float(plastic.sum() * area)}
+    if terrain.bulldozing is not None:
+        out["heaped_volume_m3"] = float(lift.sum() * area)
+        out["net_volume_m3"] = float((lift - plastic).sum() * area)
+        out["max_berm_height_m"] = float((lift - plastic).max()) if k else 0.0
     if on.any():
         x, y = node_coordinates(terrain)
         out["rut_bounds_m"] = [float(x[on].min()), float(y[on].min()), float(x[on].max()), float(y[on].max())]
@@ -87,8 +97,13 @@ def rut_picture(terrain: DeformableTerrain, path, title: str = "") -> Path | Non
         X, Y = X[::2, ::2], Y[::2, ::2]
         depth = terrain.rut_depth(X, Y)
     fig, ax = plt.subplots(figsize=(7, 6))
-    im = ax.pcolormesh(X, Y, 100.0 * depth, cmap="Blues", shading="auto")
-    fig.colorbar(im, ax=ax, label="rut depth (cm)")
+    if depth.min() < 0.0:              # berms (bulldozing): below the base blue-green, above it brown
+        top = 100.0 * float(np.abs(depth).max())
+        im = ax.pcolormesh(X, Y, 100.0 * depth, cmap="BrBG", vmin=-top, vmax=top, shading="auto")
+        fig.colorbar(im, ax=ax, label="depth below the base (cm; < 0: berm)")
+    else:
+        im = ax.pcolormesh(X, Y, 100.0 * depth, cmap="Blues", shading="auto")
+        fig.colorbar(im, ax=ax, label="rut depth (cm)")
     ax.set_aspect("equal")
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")

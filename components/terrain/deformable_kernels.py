@@ -9,7 +9,9 @@ when the pool was full (the component stops the run naming the terrain file and 
 
 Per node (pool arrays, shape (max_tiles, TILE, TILE)):
 
-    plastic[k, a, b]   m    plastic sinkage s_p: the rut, lasting (the unloaded surface is base − s_p)
+    plastic[k, a, b]   m    plastic sinkage s_p: the rut, lasting (the unloaded surface is base + lift − s_p)
+    lift[k, a, b]      m    soil heaped on the node by bulldozing (bulldozing.py; 0 without): it raises the
+                            node's virgin level, from which the sinkage is measured (SCM's level_initial)
     yield_p[k, a, b]   Pa   the largest pressure the node has carried, σ_y: reloading below it is elastic
 
 Base. The virgin surface is a plane (``grid[GDRES] == 0``: height ``grid[GBASE]``) or a DEM (``base_z``,
@@ -20,8 +22,8 @@ over one cell, as SCM's grid over a height map) and ca = N_z, the cosine of the 
 
 Soil law at a node loaded by a body whose underside is at height z_b, along the base normal as in
 Chrono's SCM (Bekker 1956; Wong, Theory of Ground Vehicles ch. 2; elasto-plastic split as SCM's, Krenn &
-Hirzinger 2009): the sinkage along N is s = ca (h_base − z_b) (z_b on the vertical through the node),
-s_p = ca · plastic (``plastic`` is stored vertical: the unloaded surface is h_base − plastic), and
+Hirzinger 2009): the sinkage along N is s = ca (h_base + lift − z_b) (z_b on the vertical through the node),
+s_p = ca · plastic (``plastic`` is stored vertical: the unloaded surface is h_base + lift − plastic), and
 
     σ_el = K_e (s − s_p)                 elastic trial (K_e the elastic stiffness per area, Pa/m)
     σ_B  = (k_c / b + k_φ) sⁿ            Bekker–Wong yield (b the patch's smaller dimension, m)
@@ -126,19 +128,31 @@ def node_normal(grid, base_z, i, j):
 
 
 @njit(cache=True)
-def node_height(grid, base_z, tile_of, plastic, i, j):
-    """Unloaded surface height at node (i, j), m: base − plastic (the base alone outside the patch)."""
+def node_virgin(grid, base_z, tile_of, lift, i, j):
+    """The node's virgin level, m: the base + the soil bulldozing heaped on it (``lift``; bulldozing.py)."""
     h = node_base(grid, base_z, i, j)
     if i < 0 or j < 0 or i >= grid[GNX] or j >= grid[GNY]:
         return h
     k, a, b = node_slot(tile_of, i, j)
     if k < 0:
         return h
-    return h - plastic[k, a, b]
+    return h + lift[k, a, b]
 
 
 @njit(cache=True)
-def surface(grid, base_z, tile_of, plastic, x, y):
+def node_height(grid, base_z, tile_of, plastic, lift, i, j):
+    """Unloaded surface height at node (i, j), m: base + lift − plastic (the base alone outside the patch)."""
+    h = node_base(grid, base_z, i, j)
+    if i < 0 or j < 0 or i >= grid[GNX] or j >= grid[GNY]:
+        return h
+    k, a, b = node_slot(tile_of, i, j)
+    if k < 0:
+        return h
+    return h + lift[k, a, b] - plastic[k, a, b]
+
+
+@njit(cache=True)
+def surface(grid, base_z, tile_of, plastic, lift, x, y):
     """h, ∂h/∂x, ∂h/∂y of the unloaded surface at (x, y): bilinear in the node heights (the base's own
     nodes continue outside the patch)."""
     cell = grid[GCELL]
@@ -147,10 +161,10 @@ def surface(grid, base_z, tile_of, plastic, x, y):
     i = int(math.floor(fx))
     j = int(math.floor(fy))
     tx, ty = fx - i, fy - j
-    h00 = node_height(grid, base_z, tile_of, plastic, i, j)
-    h10 = node_height(grid, base_z, tile_of, plastic, i + 1, j)
-    h01 = node_height(grid, base_z, tile_of, plastic, i, j + 1)
-    h11 = node_height(grid, base_z, tile_of, plastic, i + 1, j + 1)
+    h00 = node_height(grid, base_z, tile_of, plastic, lift, i, j)
+    h10 = node_height(grid, base_z, tile_of, plastic, lift, i + 1, j)
+    h01 = node_height(grid, base_z, tile_of, plastic, lift, i, j + 1)
+    h11 = node_height(grid, base_z, tile_of, plastic, lift, i + 1, j + 1)
     h = (1 - tx) * ((1 - ty) * h00 + ty * h01) + tx * ((1 - ty) * h10 + ty * h11)
     hx = ((1 - ty) * (h10 - h00) + ty * (h11 - h01)) / cell
     hy = ((1 - tx) * (h01 - h00) + tx * (h11 - h10)) / cell
@@ -158,11 +172,11 @@ def surface(grid, base_z, tile_of, plastic, x, y):
 
 
 @njit(cache=True)
-def query_surface(grid, base_z, tile_of, plastic, p, distance, normal):
+def query_surface(grid, base_z, tile_of, plastic, lift, p, distance, normal):
     """First-order signed distance and outward normal of points p (n, 3) to the unloaded surface (as a DEM:
     d = (z − h) / √(1 + h_x² + h_y²), n = (−h_x, −h_y, 1) / √(…))."""
     for m in range(p.shape[0]):
-        h, hx, hy = surface(grid, base_z, tile_of, plastic, p[m, 0], p[m, 1])
+        h, hx, hy = surface(grid, base_z, tile_of, plastic, lift, p[m, 0], p[m, 1])
         s = math.sqrt(1.0 + hx * hx + hy * hy)
         distance[m] = (p[m, 2] - h) / s
         normal[m, 0] = -hx / s
@@ -213,7 +227,7 @@ def commit_node(grid, soil, tile_of, plastic, yield_p, used, i, j, s, b, ca):
 
 
 @njit(cache=True)
-def press_nodes(grid, base_z, soil, tile_of, plastic, yield_p, used, ii, jj, z_body, b, commit, sigma):
+def press_nodes(grid, base_z, soil, tile_of, plastic, yield_p, lift, used, ii, jj, z_body, b, commit, sigma):
     """Pressure σ (Pa, into ``sigma``) at nodes (ii, jj) under a body whose underside is at heights
     ``z_body`` (m) on the nodes' verticals, patch side b (m); with ``commit`` the loads are committed
     (plastic flow). Returns the number of nodes that flowed, −1 when the tile pool ran out. The plate
@@ -221,7 +235,7 @@ def press_nodes(grid, base_z, soil, tile_of, plastic, yield_p, used, ii, jj, z_b
     flows = 0
     for m in range(ii.shape[0]):
         ca = node_normal(grid, base_z, ii[m], jj[m])[2]
-        s = ca * (node_base(grid, base_z, ii[m], jj[m]) - z_body[m])
+        s = ca * (node_virgin(grid, base_z, tile_of, lift, ii[m], jj[m]) - z_body[m])
         s_p, s_y = node_state(tile_of, plastic, yield_p, ii[m], jj[m])
         sigma[m] = pressure(soil, b, s, ca * s_p, s_y)[0]
         if commit and sigma[m] > 0.0:

@@ -57,10 +57,11 @@ from snakesim.components.multibody.robot_model import RobotModel
 from snakesim.components.multibody.robot_ports import link_element_names, link_shape
 from snakesim.components.multibody.urdf import MultibodyModelError, rpy_matrix
 from snakesim.components.terrain.base import Terrain
+from snakesim.components.terrain.bulldozing import SoilFlowLog
 from snakesim.components.terrain.deformable import DeformableTerrain
 
 from .body_kernels import L_NODES, L_NORMAL, L_SINKAGE, body_soil
-from .contact import check_cell, write_soil_files
+from .contact import NO_LOG, after_commit, check_cell, write_soil_files
 from .kernels import SCRATCH_COLUMNS, scratch_rows
 
 
@@ -118,7 +119,7 @@ class BodyPieces:
 class _Run:
     def __init__(self, nl):
         self.terrain = None
-        self.scratch = self.walls = None
+        self.scratch = self.walls = self.flow = None
         self.per_link, self.totals = np.zeros((nl, 3)), np.zeros(2)
         self.commit_wrenches = np.zeros((nl, 6))
         # the Jacobian's evaluation: its own outputs and blocks (body_kernels.py)
@@ -160,17 +161,20 @@ class SoilBodyContact(Component[SoilBodyContactParams]):
         check_cell(terrain, g.geo[:, 0], g.geo[:, 1], g.names, what="body cylinder")
         run.walls = self._walls(terrain)
         run.terrain = terrain
-        run.scratch = np.zeros((scratch_rows(g.geo[:, 0], g.geo[:, 1], terrain.cell), SCRATCH_COLUMNS))
+        rows = scratch_rows(g.geo[:, 0], g.geo[:, 1], terrain.cell)
+        run.scratch = np.zeros((rows, SCRATCH_COLUMNS))
+        run.flow = SoilFlowLog(terrain, rows * len(g.link))
         return terrain
 
     def _evaluate(self, run, terrain, poses, vels, wrenches, commit, jac=False):
         st, g = terrain.state, self.pieces
         wrenches[...] = 0.0
         per_link, totals = (run.jac_per_link, run.jac_totals) if jac else (run.per_link, run.totals)
-        return body_soil(terrain.grid, terrain.base_z, terrain.soil, st.tile_of, st.plastic, st.yield_p, st.used,
-                         g.link, g.geo, g.R, g.p, np.ascontiguousarray(poses, dtype=np.float64),
-                         np.ascontiguousarray(vels, dtype=np.float64), self.p.v_eps, run.walls, commit, run.scratch,
-                         wrenches, per_link, totals, jac, run.d_twist, run.d_pose, run.on_link)
+        log, log_n = (run.flow.entries, run.flow.count) if commit else NO_LOG
+        return body_soil(terrain.grid, terrain.base_z, terrain.soil, st.tile_of, st.plastic, st.yield_p, st.lift,
+                         st.used, g.link, g.geo, g.R, g.p, np.ascontiguousarray(poses, dtype=np.float64),
+                         np.ascontiguousarray(vels, dtype=np.float64), self.p.v_eps, run.walls, commit, log, log_n,
+                         run.scratch, wrenches, per_link, totals, jac, run.d_twist, run.d_pose, run.on_link)
 
     def _walls(self, terrain: DeformableTerrain) -> np.ndarray:
         """The kernel's [γ N/m³, K_p] of the rut walls (γ = 0: off): Rankine's K_p = tan²(45° + φ/2)."""
@@ -210,11 +214,7 @@ class SoilBodyContact(Component[SoilBodyContactParams]):
         run = u.cache
         terrain = self._bind(run, u.terrain)
         flows = self._evaluate(run, terrain, u.link_poses, u.link_velocities, run.commit_wrenches, True)
-        if flows < 0:
-            self.stop(f"terrain '{terrain.source}': all {terrain.max_tiles} tiles of its max_tiles are in use at "
-                      f"t = {t:.6g} s (each 32 × 32 nodes of {terrain.cell:g} m); raise max_tiles in the terrain file")
-        elif flows > 0:
-            terrain.state.changed(t)
+        after_commit(self, terrain, run.flow, flows, t)
         touching = run.per_link[:, L_NODES] > 0
         if touching.any():
             deepest = float(run.per_link[touching, L_SINKAGE].max())

@@ -30,8 +30,9 @@ from numba import njit
 
 from snakesim.components.contact.jacobian_kernels import add_lever_quadratic, add_lever_rank1
 
+from snakesim.components.terrain.bulldozing_kernels import commit_logged
 from snakesim.components.terrain.deformable_kernels import (GCELL, SC, SDAMP, SKE, SKJ, SN, STANPHI, base_normal,
-                                                           commit_node, node_state, pressure)
+                                                           node_state, pressure)
 
 from .kernels import (_I, _J, _N0, _N1, _N2, _PX, _PY, _SINK, _ZB, add_normal_damping, cross, cylinder_nodes,
                       quat_rotate, soil_top)
@@ -41,10 +42,12 @@ L_NORMAL, L_SINKAGE, L_NODES = range(3)
 
 
 @njit(cache=True)
-def body_soil(grid, base_z, soil, tile_of, plastic, yield_p, used, piece_link, piece_geo, piece_R, piece_p, poses, vels,
-              v_eps, walls, commit, scratch, wrenches, per_link, totals, jac, d_twist, d_pose, on_link):
+def body_soil(grid, base_z, soil, tile_of, plastic, yield_p, lift, used, piece_link, piece_geo, piece_R, piece_p,
+              poses, vels, v_eps, walls, commit, log, log_n, scratch, wrenches, per_link, totals, jac, d_twist, d_pose,
+              on_link):
     """Every piece against the soil (module docstring; the model: body_contact.py). ``walls`` [γ N/m³, K_p]:
-    the rut walls' passive pressure (γ = 0: off; ``rut_wall``). Returns the nodes a commit made flow (0
+    the rut walls' passive pressure (γ = 0: off; ``rut_wall``); ``log``, ``log_n``: the commit's log for
+    bulldozing (terrain/bulldozing_kernels.py; empty: none). Returns the nodes a commit made flow (0
     without ``commit``), −1 when the terrain's tile pool is full. With ``jac``: the links' blocks into
     ``d_twist``, ``d_pose`` (nl, 6, 6), those with one marked in ``on_link`` (cleared first)."""
     cell = grid[GCELL]
@@ -76,7 +79,7 @@ def body_soil(grid, base_z, soil, tile_of, plastic, yield_p, used, piece_link, p
             continue                             # standing on its end: not modelled
         if cz - r * math.sqrt(1.0 - a2 * a2) - 0.5 * L * abs(a2) > soil_top(grid, base_z, cx, cy, 0.5 * L + r):
             continue                             # wholly above the virgin surface
-        m, s_lo, s_hi, pen = cylinder_nodes(grid, base_z, tile_of, plastic, yield_p, cx, cy, cz, a0, a1, a2, r, L,
+        m, s_lo, s_hi, pen = cylinder_nodes(grid, base_z, tile_of, plastic, yield_p, lift, cx, cy, cz, a0, a1, a2, r, L,
                                             scratch)
         if m == 0:
             continue
@@ -164,7 +167,7 @@ def body_soil(grid, base_z, soil, tile_of, plastic, yield_p, used, piece_link, p
                     add_lever_rank1(rc, gk, mk, d_pose[row])
                 on_link[row] = True
             if commit:
-                f = commit_node(grid, soil, tile_of, plastic, yield_p, used, i, j, sink, b, ca)
+                f = commit_logged(grid, soil, tile_of, plastic, yield_p, used, i, j, sink, b, ca, log, log_n, k)
                 if f < 0:
                     return -1
                 flows += f

@@ -70,6 +70,7 @@ from snakesim.components.contact.robot_screws import screw_layout
 from snakesim.components.multibody.robot_model import RobotModel
 from snakesim.components.multibody.robot_ports import joint_names, joint_shape, link_element_names, link_shape
 from snakesim.components.terrain.base import Terrain
+from snakesim.components.terrain.bulldozing import SoilFlowLog
 from snakesim.components.terrain.deformable import DeformableTerrain
 
 from .kernels import NODES, NORMAL, SCRATCH_COLUMNS, SINKAGE, SLIP, THRUST, scratch_rows, screw_soil
@@ -138,16 +139,34 @@ class SoilEvaluation:
 
 
 def evaluate(terrain: DeformableTerrain, g: ScrewGeometry, poses, vels, joint_v, wrenches, ev: SoilEvaluation,
-             helix_ratio: float, v_eps: float, commit: bool, jac: bool = False) -> int:
-    """Screw forces into ``wrenches`` (zeroed first) and ``ev``; commits the loads with ``commit``, fills
-    ``ev``'s Jacobian blocks with ``jac``. The number of nodes that flowed, −1 when the tile pool is full."""
+             helix_ratio: float, v_eps: float, commit: bool, jac: bool = False, flow: SoilFlowLog | None = None) -> int:
+    """Screw forces into ``wrenches`` (zeroed first) and ``ev``; commits the loads with ``commit`` (logged in
+    ``flow`` for bulldozing), fills ``ev``'s Jacobian blocks with ``jac``. The number of nodes that flowed, −1
+    when the tile pool is full."""
     st = terrain.state
     wrenches[...] = 0.0
-    return screw_soil(terrain.grid, terrain.base_z, terrain.soil, st.tile_of, st.plastic, st.yield_p, st.used, g.rows,
-                      g.geo, g.mount_R, g.mount_p, np.ascontiguousarray(poses, dtype=np.float64),
+    log, log_n = (flow.entries, flow.count) if flow is not None else NO_LOG
+    return screw_soil(terrain.grid, terrain.base_z, terrain.soil, st.tile_of, st.plastic, st.yield_p, st.lift, st.used,
+                      g.rows, g.geo, g.mount_R, g.mount_p, np.ascontiguousarray(poses, dtype=np.float64),
                       np.ascontiguousarray(vels, dtype=np.float64), np.ascontiguousarray(joint_v, dtype=np.float64),
-                      helix_ratio, v_eps, commit, ev.scratch, wrenches, ev.per_screw, ev.totals, jac, ev.d_twist,
-                      ev.d_pose, ev.on_link)
+                      helix_ratio, v_eps, commit, log, log_n, ev.scratch, wrenches, ev.per_screw, ev.totals, jac,
+                      ev.d_twist, ev.d_pose, ev.on_link)
+
+
+#: the kernels' log arguments when nothing is logged (no bulldozing)
+NO_LOG = (np.zeros((0, 4)), np.zeros(2, dtype=np.int64))
+
+
+def after_commit(component, terrain: DeformableTerrain, flow: SoilFlowLog, flows: int, t: float) -> None:
+    """After a soil contact's commit: bulldoze (``flow``), stop the run when the tile pool ran out, tell the
+    terrain's consumers when the soil changed."""
+    raised = flow.apply(terrain) if flows >= 0 else 0
+    if flows < 0 or raised < 0:
+        component.stop(f"terrain '{terrain.source}': all {terrain.max_tiles} tiles of its max_tiles are in use at "
+                       f"t = {t:.6g} s (each 32 × 32 nodes of {terrain.cell:g} m); raise max_tiles in the terrain "
+                       f"file")
+    elif flows > 0 or raised > 0:
+        terrain.state.changed(t)
 
 
 class _Run:
@@ -156,7 +175,7 @@ class _Run:
         self.out = None
         self.commit = None
         self.commit_wrenches = self.jac_wrenches = None
-        self.jac = None
+        self.jac = self.flow = None
         self.ns = ns
         # per screw over the run's ticks in contact: Σ sinkage, its max, Σ slip and ticks (while spinning)
         self.sink_sum, self.sink_max, self.contact_ticks = np.zeros(ns), np.zeros(ns), np.zeros(ns)
@@ -204,6 +223,7 @@ class TerramechanicsContact(Component[TerramechanicsContactParams]):
         run.jac = SoilEvaluation(self.screws.ns, rows, nl)
         run.commit_wrenches = np.zeros((nl, 6))
         run.jac_wrenches = np.zeros((nl, 6))
+        run.flow = SoilFlowLog(terrain, rows * self.screws.ns)
         return terrain
 
     def output(self, t, x, u, y):
@@ -243,12 +263,8 @@ class TerramechanicsContact(Component[TerramechanicsContactParams]):
         terrain = self._bind(run, u.terrain)
         p = self.p
         flows = evaluate(terrain, self.geometry, u.link_poses, u.link_velocities, u.joint_v, run.commit_wrenches,
-                         run.commit, p.helix_shear_ratio, p.v_eps, True)
-        if flows < 0:
-            self.stop(f"terrain '{terrain.source}': all {terrain.max_tiles} tiles of its max_tiles are in use at "
-                      f"t = {t:.6g} s (each 32 × 32 nodes of {terrain.cell:g} m); raise max_tiles in the terrain file")
-        elif flows > 0:
-            terrain.state.changed(t)
+                         run.commit, p.helix_shear_ratio, p.v_eps, True, flow=run.flow)
+        after_commit(self, terrain, run.flow, flows, t)
         ps = run.commit.per_screw
         touching = ps[:, NODES] > 0
         run.contact_ticks += touching

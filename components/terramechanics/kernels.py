@@ -39,8 +39,9 @@ from numba import njit
 
 from snakesim.components.contact.jacobian_kernels import add_lever_quadratic, add_lever_rank1
 from snakesim.components.terrain.deformable_kernels import (GCELL, GDRES, GNX, GNY, GSLOPE, GX0, GY0, SC, SDAMP, SKE,
-                                                           SKJ, SN, STANPHI, base_height, base_normal, commit_node,
-                                                           node_base, node_normal, node_state, pressure)
+                                                           SKJ, SN, STANPHI, base_height, base_normal, node_normal,
+                                                           node_state, node_virgin, pressure)
+from snakesim.components.terrain.bulldozing_kernels import commit_logged
 
 # per-screw output columns
 SINKAGE, SLIP, THRUST, NORMAL, NODES = range(5)
@@ -115,7 +116,7 @@ def cylinder_along_normal(cx, cy, cz, a0, a1, a2, r, sx, sy, sz, n0, n1, n2):
 
 
 @njit(cache=True)
-def cylinder_nodes(grid, base_z, tile_of, plastic, yield_p, cx, cy, cz, a0, a1, a2, r, L, scratch):
+def cylinder_nodes(grid, base_z, tile_of, plastic, yield_p, lift, cx, cy, cz, a0, a1, a2, r, L, scratch):
     """The nodes whose unloaded surface a finite cylinder (centre c, unit axis a, radius r, length L) presses,
     into ``scratch`` rows (the columns above: the contact point P where the node's line along the base normal
     enters the cylinder, vertical on a plane base; u + towards a × e_down); (count, least and largest s_ax,
@@ -166,7 +167,7 @@ def cylinder_nodes(grid, base_z, tile_of, plastic, yield_p, cx, cy, cz, a0, a1, 
         for j in range(jj_lo, jj_hi + 1):
             y = y0 + j * cell
             s_p, s_y = node_state(tile_of, plastic, yield_p, i, j)
-            hb = node_base(grid, base_z, i, j)
+            hb = node_virgin(grid, base_z, tile_of, lift, i, j)
             m0, m1, m2 = 0.0, 0.0, 1.0
             if plane:                        # the vertical through the node
                 px, py = x, y
@@ -220,9 +221,11 @@ def add_normal_damping(D, k, n0, n1, n2):
 
 
 @njit(cache=True)
-def screw_soil(grid, base_z, soil, tile_of, plastic, yield_p, used, rows, geo, mount_R, mount_p, poses, vels, joint_v,
-               helix_ratio, v_eps, commit, scratch, wrenches, per_screw, totals, jac, d_twist, d_pose, on_link):
-    """Every screw against the soil (module docstring; the model: contact.py). Returns the number of
+def screw_soil(grid, base_z, soil, tile_of, plastic, yield_p, lift, used, rows, geo, mount_R, mount_p, poses, vels,
+               joint_v, helix_ratio, v_eps, commit, log, log_n, scratch, wrenches, per_screw, totals, jac, d_twist,
+               d_pose, on_link):
+    """Every screw against the soil (module docstring; the model: contact.py); ``log``, ``log_n``: the commit's
+    log for bulldozing (terrain/bulldozing_kernels.py; empty: none). Returns the number of
     nodes a commit made flow (0 without ``commit``), −1 when it found the terrain's tile pool full. With
     ``jac``: the screw links' blocks into ``d_twist``, ``d_pose`` (nl, 6, 6), the links with one marked in
     ``on_link`` (the blocks of links marked before are cleared first)."""
@@ -263,7 +266,7 @@ def screw_soil(grid, base_z, soil, tile_of, plastic, yield_p, used, rows, geo, m
             continue                             # standing on its end: not modelled
         if cz - r * math.sqrt(1.0 - a2 * a2) - 0.5 * L * abs(a2) > soil_top(grid, base_z, cx, cy, 0.5 * L + r):
             continue                             # wholly above the virgin surface (ruts only go down)
-        m, s_lo, s_hi, pen = cylinder_nodes(grid, base_z, tile_of, plastic, yield_p, cx, cy, cz, a0, a1, a2, r, L,
+        m, s_lo, s_hi, pen = cylinder_nodes(grid, base_z, tile_of, plastic, yield_p, lift, cx, cy, cz, a0, a1, a2, r, L,
                                             scratch)
         if m == 0:
             continue
@@ -354,7 +357,7 @@ def screw_soil(grid, base_z, soil, tile_of, plastic, yield_p, used, rows, geo, m
                     add_lever_rank1(rc, gk, mk, d_pose[sr])
                 on_link[sr] = True
             if commit:
-                f = commit_node(grid, soil, tile_of, plastic, yield_p, used, i, j, sink, b, ca)
+                f = commit_logged(grid, soil, tile_of, plastic, yield_p, used, i, j, sink, b, ca, log, log_n, s)
                 if f < 0:
                     return -1
                 flows += f

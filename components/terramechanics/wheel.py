@@ -126,6 +126,9 @@ def wheel_forces(terrain, wheel: RigidWheel, centre, heading: float, slip: float
     if terrain.grid[GDRES] != 0.0:
         raise ValueError(f"terrain '{terrain.source}': the rigid wheel (Wong–Reece) is for level ground; this "
                          f"soil lies on a height-field base")
+    if terrain.bulldozing is not None:
+        raise ValueError(f"terrain '{terrain.source}': the rigid wheel does not bulldoze; give the terrain no "
+                         f"bulldozing")
     st = terrain.state
     out = np.zeros(5)
     flows = wheel_soil(terrain.grid, terrain.soil, st.tile_of, st.plastic, st.yield_p, st.used, float(centre[0]),

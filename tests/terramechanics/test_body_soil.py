@@ -22,6 +22,7 @@ import pytest
 
 from snakesim.components.terrain.deformable import DeformableTerrain
 from snakesim.components.terramechanics.body_kernels import L_NODES, L_NORMAL, L_SINKAGE, body_soil
+from snakesim.components.terramechanics.contact import NO_LOG
 from snakesim.components.terramechanics.kernels import SCRATCH_COLUMNS, scratch_rows
 
 from test_rigid_wheel import SAND
@@ -56,9 +57,9 @@ def kernel(across=1.0, v=(0.5, 0.0, 0.0), yaw=0.0, soil=SAND, cell=CELL, v_eps=1
     scratch = np.zeros((scratch_rows(np.array([R]), np.array([L]), cell), SCRATCH_COLUMNS))
     w, per_link, totals = np.zeros((1, 6)), np.zeros((1, 3)), np.zeros(2)
     d_twist, d_pose, on = np.zeros((1, 6, 6)), np.zeros((1, 6, 6)), np.zeros(1, dtype=np.bool_)
-    body_soil(t.grid, t.base_z, t.soil, st.tile_of, st.plastic, st.yield_p, st.used, np.array([0]),
+    body_soil(t.grid, t.base_z, t.soil, st.tile_of, st.plastic, st.yield_p, st.lift, st.used, np.array([0]),
               np.array([[R, L, 1.0, across]]), piece_R, np.zeros((1, 3)), poses, vels, v_eps, np.asarray(walls, float),
-              False, scratch, w, per_link, totals, blocks, d_twist, d_pose, on)
+              False, *NO_LOG, scratch, w, per_link, totals, blocks, d_twist, d_pose, on)
     return (w[0], per_link[0], d_twist[0], d_pose[0]) if blocks else (w[0], per_link[0])
 
 

@@ -29,6 +29,7 @@ import numpy as np
 import pytest
 
 from snakesim.components.terrain.deformable import DeformableTerrain, SoilSpec
+from snakesim.components.terramechanics.contact import NO_LOG
 from snakesim.components.terramechanics.kernels import (SCRATCH_COLUMNS, SINKAGE, SLIP, THRUST, scratch_rows,
                                                         screw_soil)
 
@@ -78,9 +79,9 @@ def soil_call(vels, soil=SNOW, cell=CELL, v_eps=1e-9, poses=None, terrain=None):
     scratch = np.zeros((scratch_rows(np.array([R]), np.array([L]), cell), SCRATCH_COLUMNS))
     wrenches, per_screw, totals = np.zeros((1, 6)), np.zeros((1, 5)), np.zeros(2)
     d_twist, d_pose, on = np.zeros((1, 6, 6)), np.zeros((1, 6, 6)), np.zeros(1, dtype=np.bool_)
-    screw_soil(t.grid, t.base_z, t.soil, st.tile_of, st.plastic, st.yield_p, st.used, rows, geo, mount_R, mount_p,
-               poses, np.asarray(vels, dtype=float), np.array([OMEGA]), RATIO, v_eps, False, scratch, wrenches, per_screw,
-               totals, True, d_twist, d_pose, on)
+    screw_soil(t.grid, t.base_z, t.soil, st.tile_of, st.plastic, st.yield_p, st.lift, st.used, rows, geo, mount_R,
+               mount_p, poses, np.asarray(vels, dtype=float), np.array([OMEGA]), RATIO, v_eps, False, *NO_LOG, scratch,
+               wrenches, per_screw, totals, True, d_twist, d_pose, on)
     return wrenches[0], per_screw[0], d_twist[0], d_pose[0]
 
 

@@ -33,8 +33,8 @@ def plate_force(t, z, commit=False):
     ii, jj = plate_nodes()
     sigma = np.zeros(ii.size)
     st = t.state
-    press_nodes(t.grid, t.base_z, t.soil, st.tile_of, st.plastic, st.yield_p, st.used, ii, jj, np.full(ii.size, z),
-                SIDE, commit, sigma)
+    press_nodes(t.grid, t.base_z, t.soil, st.tile_of, st.plastic, st.yield_p, st.lift, st.used, ii, jj,
+                np.full(ii.size, z), SIDE, commit, sigma)
     return sigma.sum() * CELL * CELL
 
 

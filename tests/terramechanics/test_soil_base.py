@@ -165,7 +165,8 @@ def test_a_plate_on_a_slope_leaves_a_rut_along_the_normal():
     z = np.array([node_base(t.grid, t.base_z, i, j) for i, j in zip(ii, jj)]) - s / ca
     sigma = np.zeros(ii.size)
     st = t.state
-    press_nodes(t.grid, t.base_z, t.soil, st.tile_of, st.plastic, st.yield_p, st.used, ii, jj, z, 0.2, True, sigma)
+    press_nodes(t.grid, t.base_z, t.soil, st.tile_of, st.plastic, st.yield_p, st.lift, st.used, ii, jj, z, 0.2, True,
+                sigma)
     bekker = (SNOW.k_c / 0.2 + SNOW.k_phi) * s ** SNOW.n
     assert np.allclose(sigma, bekker, rtol=1e-9)
     x, y = t.grid[0] + ii * t.cell, t.grid[1] + jj * t.cell
