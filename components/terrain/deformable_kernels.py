@@ -127,28 +127,28 @@ def node_normal(grid, base_z, i, j):
     return base_normal(grid, base_z, grid[GX0] + i * grid[GCELL], grid[GY0] + j * grid[GCELL])
 
 
+@njit(cache=True, inline="always")
+def node_pool(grid, tile_of, i, j):
+    """(slot, a, b) of node (i, j) in the pool arrays; slot −1 when the node is outside the patch or virgin."""
+    if i < 0 or j < 0 or i >= grid[GNX] or j >= grid[GNY]:
+        return -1, 0, 0
+    return node_slot(tile_of, i, j)
+
+
 @njit(cache=True)
 def node_virgin(grid, base_z, tile_of, lift, i, j):
     """The node's virgin level, m: the base + the soil bulldozing heaped on it (``lift``; bulldozing.py)."""
+    k, a, b = node_pool(grid, tile_of, i, j)
     h = node_base(grid, base_z, i, j)
-    if i < 0 or j < 0 or i >= grid[GNX] or j >= grid[GNY]:
-        return h
-    k, a, b = node_slot(tile_of, i, j)
-    if k < 0:
-        return h
-    return h + lift[k, a, b]
+    return h if k < 0 else h + lift[k, a, b]
 
 
 @njit(cache=True)
 def node_height(grid, base_z, tile_of, plastic, lift, i, j):
     """Unloaded surface height at node (i, j), m: base + lift − plastic (the base alone outside the patch)."""
+    k, a, b = node_pool(grid, tile_of, i, j)
     h = node_base(grid, base_z, i, j)
-    if i < 0 or j < 0 or i >= grid[GNX] or j >= grid[GNY]:
-        return h
-    k, a, b = node_slot(tile_of, i, j)
-    if k < 0:
-        return h
-    return h + lift[k, a, b] - plastic[k, a, b]
+    return h if k < 0 else h + lift[k, a, b] - plastic[k, a, b]
 
 
 @njit(cache=True)

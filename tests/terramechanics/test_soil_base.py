@@ -173,24 +173,24 @@ def test_a_plate_on_a_slope_leaves_a_rut_along_the_normal():
     assert np.allclose(ca * t.rut_depth(x, y), s - bekker / SNOW.elastic_k, rtol=1e-9)
 
 
+def snow_file(path, lines):
+    """A deformable terrain file at ``path``: ``lines`` (YAML) and the snow's soil."""
+    path.write_text(lines + "soil: {include: soils/snow-us.yaml}\n")
+    return str(path)
+
+
 def test_a_base_that_is_not_a_height_field_is_refused_naming_the_key(tmp_path):
-    path = tmp_path / "soil-on-a-tube.yaml"
-    path.write_text("kind: deformable\nbase: {kind: tube, radius: 0.3}\n"
-                    "soil: {k_c: 4.37e3, k_phi: 196.72e3, n: 1.6, cohesion: 1.03e3, friction_angle: 19.7,\n"
-                    "       janosi_k: 0.025, elastic_k: 5.0e5}\n")
+    path = snow_file(tmp_path / "soil-on-a-tube.yaml", "kind: deformable\nbase: {kind: tube, radius: 0.3}\n")
     with pytest.raises(ConfigError) as e:
-        load_terrain(str(path))
+        load_terrain(path)
     msg = str(e.value)
     assert "soil-on-a-tube.yaml" in msg and "base" in msg and "tube" in msg and "dem" in msg
 
 
 def test_base_and_base_height_together_are_refused(tmp_path):
-    path = tmp_path / "both.yaml"
-    path.write_text("kind: deformable\nbase_height: 0.5\nbase: fractal-dem\n"
-                    "soil: {k_c: 4.37e3, k_phi: 196.72e3, n: 1.6, cohesion: 1.03e3, friction_angle: 19.7,\n"
-                    "       janosi_k: 0.025, elastic_k: 5.0e5}\n")
+    path = snow_file(tmp_path / "both.yaml", "kind: deformable\nbase_height: 0.5\nbase: fractal-dem\n")
     with pytest.raises(ConfigError) as e:
-        load_terrain(str(path))
+        load_terrain(path)
     assert "both.yaml" in str(e.value) and "base_height" in str(e.value)
 
 
