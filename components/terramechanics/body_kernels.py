@@ -28,14 +28,14 @@ import math
 import numpy as np
 from numba import njit
 
-from snakesim.components.contact.jacobian_kernels import add_lever_quadratic, add_lever_rank1
+from snakesim.components.contact.jacobian_kernels import add_lever_quadratic
 
 from snakesim.components.terrain.bulldozing_kernels import commit_logged
-from snakesim.components.terrain.deformable_kernels import (GCELL, SC, SDAMP, SKE, SKJ, SN, STANPHI, base_normal,
-                                                           node_state, pressure)
+from snakesim.components.terrain.deformable_kernels import (GCELL, SC, SDAMP, SKJ, STANPHI, base_normal, node_state,
+                                                           pressure)
 
-from .kernels import (_I, _J, _N0, _N1, _N2, _PX, _PY, _SINK, _ZB, add_normal_damping, cross, cylinder_nodes,
-                      quat_rotate, soil_top)
+from .kernels import (_I, _J, _N0, _N1, _N2, _PX, _PY, _SINK, _ZB, add_normal_damping, add_pressure_slope,
+                      add_wrench, clear_outputs, cross, cylinder_nodes, quat_rotate, soil_top)
 
 # per-link output columns
 L_NORMAL, L_SINKAGE, L_NODES = range(3)
@@ -54,16 +54,8 @@ def body_soil(grid, base_z, soil, tile_of, plastic, yield_p, lift, used, piece_l
     cell_area = cell * cell
     c_coh, tan_phi, kj, damp = soil[SC], soil[STANPHI], soil[SKJ], soil[SDAMP]
     flows = 0
-    D = np.zeros((3, 3))
-    rc, gk, mk = np.zeros(3), np.zeros(3), np.zeros(3)
-    if jac:
-        for k in range(on_link.size):
-            if on_link[k]:
-                d_twist[k, :, :] = 0.0
-                d_pose[k, :, :] = 0.0
-                on_link[k] = False
-    totals[0] = 0.0
-    totals[1] = 0.0
+    D, rc, gk, mk = np.zeros((3, 3)), np.zeros(3), np.zeros(3), np.zeros(3)      # a node's Jacobian terms
+    clear_outputs(jac, on_link, d_twist, d_pose, totals)
     for k in range(per_link.shape[0]):
         for c in range(per_link.shape[1]):
             per_link[k, c] = 0.0
@@ -157,26 +149,15 @@ def body_soil(grid, base_z, soil, tile_of, plastic, yield_p, lift, used, piece_l
                 rc[0], rc[1], rc[2] = rx, ry, rz
                 add_lever_quadratic(rc, D, d_twist[row])
                 if sig > 0.0 and sink > s_p:
-                    # σ' on the branch pressure() took: elastic (K_e (s − s_p)) or Bekker's (n σ / s)
-                    dsig = soil[SKE] if sigma == soil[SKE] * (sink - s_p) else soil[SN] * sigma / sink
-                    k_sh = tan_phi / tau_max
-                    gk[0] = area * N0 - tau * pu0 / rh * k_sh
-                    gk[1] = area * N1 - tau * pu1 / rh * k_sh
-                    gk[2] = area * ca - tau * pu2 / rh * k_sh
-                    mk[0], mk[1], mk[2] = -dsig * N0, -dsig * N1, -dsig * ca     # ∂s/∂p = −N
-                    add_lever_rank1(rc, gk, mk, d_pose[row])
+                    add_pressure_slope(soil, sigma, sink, s_p, tau_max, area, N0, N1, ca, -tau * pu0 / rh,
+                                       -tau * pu1 / rh, -tau * pu2 / rh, rc, gk, mk, d_pose[row])
                 on_link[row] = True
             if commit:
                 f = commit_logged(grid, soil, tile_of, plastic, yield_p, used, i, j, sink, b, ca, log, log_n, k)
                 if f < 0:
                     return -1
                 flows += f
-        wrenches[row, 0] += fx
-        wrenches[row, 1] += fy
-        wrenches[row, 2] += fz
-        wrenches[row, 3] += tx
-        wrenches[row, 4] += ty
-        wrenches[row, 5] += tz
+        add_wrench(wrenches[row], fx, fy, fz, tx, ty, tz)
         if walls[0] > 0.0:
             rut_wall(grid, base_z, soil, walls, cx, cy, m0, m1, m2, a0, a1, a2, r, deepest, s_hi - s_lo + cell,
                      vx, vy, vz, wx, wy, wz, v_eps, wrenches[row], jac, D, rc, d_twist[row])

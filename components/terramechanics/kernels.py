@@ -220,6 +220,45 @@ def add_normal_damping(D, k, n0, n1, n2):
             D[a, c] -= k * n[a] * n[c]
 
 
+@njit(cache=True, inline="always")
+def add_pressure_slope(soil, sigma, sink, s_p, tau_max, area, n0, n1, n2, f0, f1, f2, rc, gk, mk, block):
+    """A loaded node's height derivative (module docstring), moved to the link origin into ``block``:
+    −σ'(s) N_z (A N + f tan φ / τ_max) for the displacement along ẑ, −σ'(s) N_k (…) along each axis k
+    (∂s/∂p = −N); σ' on the branch pressure() took: elastic (K_e (s − s_p)) or Bekker's (n σ / s). f is the
+    node's shear force (N), ``gk``, ``mk`` scratch (3,)."""
+    dsig = soil[SKE] if sigma == soil[SKE] * (sink - s_p) else soil[SN] * sigma / sink
+    k_sh = soil[STANPHI] / tau_max
+    gk[0] = area * n0 + f0 * k_sh
+    gk[1] = area * n1 + f1 * k_sh
+    gk[2] = area * n2 + f2 * k_sh
+    mk[0], mk[1], mk[2] = -dsig * n0, -dsig * n1, -dsig * n2
+    add_lever_rank1(rc, gk, mk, block)
+
+
+@njit(cache=True, inline="always")
+def add_wrench(w, fx, fy, fz, tx, ty, tz):
+    """w (6,) += (f, τ)."""
+    w[0] += fx
+    w[1] += fy
+    w[2] += fz
+    w[3] += tx
+    w[4] += ty
+    w[5] += tz
+
+
+@njit(cache=True)
+def clear_outputs(jac, on_link, d_twist, d_pose, totals):
+    """Zero ``totals`` and, with ``jac``, the blocks of the links ``on_link`` marks (unmarking them): what a
+    soil kernel fills from scratch (this file's and body_kernels.py's)."""
+    if jac:
+        for k in range(on_link.size):
+            if on_link[k]:
+                d_twist[k, :, :] = 0.0
+                d_pose[k, :, :] = 0.0
+                on_link[k] = False
+    totals[:] = 0.0
+
+
 @njit(cache=True)
 def screw_soil(grid, base_z, soil, tile_of, plastic, yield_p, lift, used, rows, geo, mount_R, mount_p, poses, vels,
                joint_v, helix_ratio, v_eps, commit, log, log_n, scratch, wrenches, per_screw, totals, jac, d_twist,
@@ -233,16 +272,8 @@ def screw_soil(grid, base_z, soil, tile_of, plastic, yield_p, lift, used, rows, 
     cell_area = cell * cell
     c_coh, tan_phi, kj, damp = soil[SC], soil[STANPHI], soil[SKJ], soil[SDAMP]
     flows = 0
-    D = np.zeros((3, 3))
-    rc, gk, mk = np.zeros(3), np.zeros(3), np.zeros(3)
-    if jac:
-        for k in range(on_link.size):
-            if on_link[k]:
-                d_twist[k, :, :] = 0.0
-                d_pose[k, :, :] = 0.0
-                on_link[k] = False
-    totals[0] = 0.0
-    totals[1] = 0.0
+    D, rc, gk, mk = np.zeros((3, 3)), np.zeros(3), np.zeros(3), np.zeros(3)      # a node's Jacobian terms
+    clear_outputs(jac, on_link, d_twist, d_pose, totals)
     for s in range(rows.shape[0]):
         for k in range(per_screw.shape[1]):
             per_screw[s, k] = 0.0
@@ -347,26 +378,15 @@ def screw_soil(grid, base_z, soil, tile_of, plastic, yield_p, lift, used, rows, 
                 rc[0], rc[1], rc[2] = X - ox, Y - oy, zb - oz
                 add_lever_quadratic(rc, D, d_twist[sr])
                 if sig > 0.0 and sink > s_p:
-                    # σ' on the branch pressure() took: elastic (K_e (s − s_p)) or Bekker's (n σ / s)
-                    dsig = soil[SKE] if sigma == soil[SKE] * (sink - s_p) else soil[SN] * sigma / sink
-                    k_sh = tan_phi / tau_max
-                    gk[0] = area * N0 + (sc * ex0 + sh * eh0) * k_sh
-                    gk[1] = area * N1 + (sc * ex1 + sh * eh1) * k_sh
-                    gk[2] = area * ca + (sc * ex2 + sh * eh2) * k_sh
-                    mk[0], mk[1], mk[2] = -dsig * N0, -dsig * N1, -dsig * ca     # ∂s/∂p = −N
-                    add_lever_rank1(rc, gk, mk, d_pose[sr])
+                    add_pressure_slope(soil, sigma, sink, s_p, tau_max, area, N0, N1, ca, sc * ex0 + sh * eh0,
+                                       sc * ex1 + sh * eh1, sc * ex2 + sh * eh2, rc, gk, mk, d_pose[sr])
                 on_link[sr] = True
             if commit:
                 f = commit_logged(grid, soil, tile_of, plastic, yield_p, used, i, j, sink, b, ca, log, log_n, s)
                 if f < 0:
                     return -1
                 flows += f
-        wrenches[sr, 0] += fx
-        wrenches[sr, 1] += fy
-        wrenches[sr, 2] += fz
-        wrenches[sr, 3] += tx
-        wrenches[sr, 4] += ty
-        wrenches[sr, 5] += tz
+        add_wrench(wrenches[sr], fx, fy, fz, tx, ty, tz)
         per_screw[s, THRUST] = fx * a0 + fy * a1 + fz * a2
         per_screw[s, SINKAGE] = deepest
         per_screw[s, NODES] = m
