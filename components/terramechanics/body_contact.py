@@ -31,8 +31,9 @@ shear's and the walls' velocity slopes (τ A / v_ε per node and P / v_ε per pi
 explicit step) and of the pressure's height slope, for linearly implicit integrators (rosenbrock_w), as the
 screws'.
 
-Not modelled: shapes other than cylinders (capsules, spheres, boxes are refused by name), bulldozing berms
-(the soil the walls push is not moved), the walls' build-up with displacement (mobilised by the slip's
+Berms: with the terrain's ``bulldozing`` the soil each commit presses out is heaped on the patch's rim
+(terrain/bulldozing.py). Not modelled: shapes other than cylinders (capsules, spheres, boxes are refused by
+name), the soil the walls push (not moved), the walls' build-up with displacement (mobilised by the slip's
 velocity), the transient build-up of j, a link standing on an end.
 
 uses robot: RobotModel

@@ -31,7 +31,8 @@ An ideal screw (a nut in the soil) advances at h ω r tan λ: v_x = 0, no shear 
 s = 1 − v_axial / (h ω r tan λ) (Lim et al. 2023; the screw-propulsion literature's definition).
 
 The step's loads are committed once per base tick (``check``): nodes that
-yield get a deeper rut (plastic sinkage) and a higher yield memory, then ``terrain.state.changed(t)``
+yield get a deeper rut (plastic sinkage) and a higher yield memory (with the terrain's ``bulldozing`` the soil
+pressed out is heaped on the rim: terrain/bulldozing.py), then ``terrain.state.changed(t)``
 tells the viewer and the sensors to redraw. ``output`` only evaluates (the integrator's stages and its
 finite-difference Jacobian evaluate many times per step and must not dig).
 
@@ -42,8 +43,8 @@ Report (``report``, summary.json's ``reports.<name>``): per screw the mean and d
 slip while driven, and the rut (terrain/deformable_files.py's ``rut_summary``).
 
 Not modelled here: body links (soil_body_contact, body_contact.py, with ``exclude_screws: true``; a scene with
-both sums their wrenches with wrench_sum), bulldozing and soil flow, lateral pressure on the rut walls (the
-body contact's rut_walls; a screw's flanks already shear the groove), screws
+both sums their wrenches with wrench_sum), lateral pressure on the rut walls (the body contact's rut_walls; a
+screw's flanks already shear the groove), screws
 standing on an end, a screw outside the terrain's patch (the base there is rigid and not sampled: keep the run
 inside the patch), the transient build-up of j (the steady helix form above).
 
