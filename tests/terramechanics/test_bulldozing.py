@@ -139,3 +139,28 @@ def test_bad_bulldozing_names_the_file_and_key(tmp_path, value, key):
         load_terrain(str(path))
     msg = str(e.value)
     assert "bad-bulldozing.yaml" in msg and key in msg
+
+
+def test_a_lidar_and_the_viewer_see_the_berms():
+    """Beams straight down from 1 m over the rut and its berms return 1 m + the depth below the base (less
+    on a berm), and the display mesh has the berms' heights: bulldozed soil is what every consumer sees."""
+    from snakesim.components.perception.ray_caster import EmbreeWorld, StaticTerrainScene
+    from snakesim.components.perception.surfaces import terrain_surfaces
+    from snakesim.components.terrain.derived import TerrainDerived
+
+    t, _ = press(BulldozingSpec(erosion_angle=30.0, flow_factor=1.0, erosion_iterations=20))
+    xs = t.grid[0] + CELL * np.arange(100, 151, 2)               # on nodes, across and along the rut
+    X, Y = np.meshgrid(xs, xs, indexing="ij")
+    x, y = X.ravel(), Y.ravel()
+    depth = t.rut_depth(x, y)
+    assert depth.min() < -1e-4 and depth.max() > 1e-3           # berms and the rut under the beams
+    scene = TerrainDerived(lambda terrain: StaticTerrainScene(terrain_surfaces(terrain, (0.0, 0.0, 0.0), 0.3,
+                                                                               CELL)))
+    o = np.column_stack([x, y, np.ones_like(x)])
+    hits = EmbreeWorld(0.0, scene.get(t), None, None).cast(o, np.tile([0.0, 0.0, -1.0], (x.size, 1)), 5.0)
+    np.testing.assert_allclose(hits.distance, 1.0 + depth, atol=1e-6)
+    mesh = t.display_mesh((0.0, 0.0, 0.0), 0.1, CELL, None)
+    v = np.asarray(mesh.vertices, dtype=np.float64)
+    on = np.abs(v[:, :2] / CELL - np.round(v[:, :2] / CELL)).max(axis=1) < 1e-6
+    np.testing.assert_allclose(v[on, 2], -t.rut_depth(v[on, 0], v[on, 1]), atol=1e-6)
+    assert v[on, 2].max() > 1e-4                                  # a berm among the vertices
