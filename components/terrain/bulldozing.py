@@ -14,8 +14,10 @@ Hirzinger 2009):
   contact whose relief differs by more than Δ tan(erosion_angle), half the excess moves down; the receiving
   node joins, so the heap spreads a ring a pass. Soil moves between nodes, never out of them: the volume is
   conserved to rounding.
-- heaped soil raises the node's virgin level (``lift``, SCM's level_initial): a body pressing a berm meets
-  the soil law from its top, and the volume it presses out is heaped on again.
+- soil put on a node refills its rut first, then raises the node's virgin level (``lift``, SCM's
+  level_initial), and is loose (the node's yield memory cleared): a body pressing a berm meets the soil law
+  from its top, and the volume it presses out is heaped on again; soil taken off a node comes from its heap
+  first, then deepens its rut.
 
 Relief is measured on the base (the plastic sinkage alone), so the slopes of a DEM base never erode. The
 kernels are bulldozing_kernels.py; ``SoilFlowLog`` is a contact's per-run buffer (the commit's log, the marks).
@@ -70,6 +72,7 @@ class SoilFlowLog:
             self.count[0] = 0
             return 0
         s, st = self.spec, terrain.state
-        return int(bulldoze(terrain.grid, st.tile_of, st.plastic, st.lift, st.used, self.entries, self.count,
+        return int(bulldoze(terrain.grid, st.tile_of, st.plastic, st.yield_p, st.lift, st.used, self.entries,
+                            self.count,
                             self.mark, self.queue, s.flow_factor, math.tan(math.radians(s.erosion_angle)),
                             s.erosion_iterations))

@@ -5,8 +5,10 @@ The log (``entries`` (cap, 4): i, j, the volume the node's commit pressed out (m
 growth × cell²), the patch; ``count`` [entries, overflow]) is written by the contact kernels' commit
 (``commit_logged``) and read once per commit by ``bulldoze``. ``mark`` (the tile pool's shape, int8) tags
 nodes during one ``bulldoze``: 1 in contact, 2 rim, 3 reached by erosion; it is all zero between calls.
-Soil heaped or moved changes ``lift`` (the node's virgin level, deformable_kernels.py); heights are compared
-as relief on the base (lift − plastic), so a DEM's own slopes never erode.
+Soil put on a node refills its rut first and then raises its virgin level (``lift``, deformable_kernels.py);
+soil taken off comes from what was heaped first, then deepens the rut (``add_soil``, ``remove_soil``), so
+``lift`` and ``plastic`` do not both grow where soil is pushed to and fro. Heights are compared as relief on
+the base (lift − plastic), so a DEM's own slopes never erode.
 """
 
 from __future__ import annotations
@@ -39,6 +41,25 @@ def commit_logged(grid, soil, tile_of, plastic, yield_p, used, i, j, s, b, ca, e
     return f
 
 
+@njit(cache=True, inline="always")
+def add_soil(plastic, yield_p, lift, k, a, b, t):
+    """Put a layer t (m, ≥ 0) of loose soil on node (k, a, b): it refills the node's rut first, then raises
+    its virgin level; the node's top is loose again (its yield memory cleared)."""
+    refill = min(t, plastic[k, a, b])
+    plastic[k, a, b] -= refill
+    lift[k, a, b] += t - refill
+    yield_p[k, a, b] = 0.0
+
+
+@njit(cache=True, inline="always")
+def remove_soil(plastic, lift, k, a, b, t):
+    """Take a layer t (m, ≥ 0) off node (k, a, b): from what was heaped on it first, then from below its
+    virgin level (a deeper rut)."""
+    cut = min(t, lift[k, a, b])
+    lift[k, a, b] -= cut
+    plastic[k, a, b] += t - cut
+
+
 @njit(cache=True)
 def _slot(grid, tile_of, used, i, j):
     """(slot, a, b) of node (i, j), its tile given one on first touch; slot −2 outside the patch, −1 when the
@@ -49,7 +70,7 @@ def _slot(grid, tile_of, used, i, j):
 
 
 @njit(cache=True)
-def bulldoze(grid, tile_of, plastic, lift, used, entries, count, mark, queue, flow_factor, tan_repose,
+def bulldoze(grid, tile_of, plastic, yield_p, lift, used, entries, count, mark, queue, flow_factor, tan_repose,
              iterations):
     """Heap each patch's pressed-out volume on its rim, then erode (bulldozing.py). Returns the number of rim
     nodes raised, −1 when the tile pool ran out. Empties the log."""
@@ -87,7 +108,7 @@ def bulldoze(grid, tile_of, plastic, lift, used, entries, count, mark, queue, fl
             dz = flow_factor * vol / ((nq - q0) * area)
             for q in range(q0, nq):
                 k, a, b = _slot(grid, tile_of, used, queue[q, 0], queue[q, 1])
-                lift[k, a, b] += dz
+                add_soil(plastic, yield_p, lift, k, a, b, dz)
             raised += nq - q0
     # erosion: soil slides from a queued node to a neighbour out of contact while their relief differs by
     # more than the repose slope allows over one cell (half the excess per move: the pair ends at the limit);
@@ -108,10 +129,9 @@ def bulldoze(grid, tile_of, plastic, lift, used, entries, count, mark, queue, fl
                 excess = (lift[k, a, b] - plastic[k, a, b]) - (lift[k2, a2, b2] - plastic[k2, a2, b2]) - limit
                 if excess <= 0.0:
                     continue
-                t = 0.5 * excess
                 moved = True
-                lift[k, a, b] -= t
-                lift[k2, a2, b2] += t
+                remove_soil(plastic, lift, k, a, b, 0.5 * excess)
+                add_soil(plastic, yield_p, lift, k2, a2, b2, 0.5 * excess)
                 if mark[k2, a2, b2] == 0 and nq < queue.shape[0]:
                     mark[k2, a2, b2] = 3
                     queue[nq, 0], queue[nq, 1] = i + d[0], j + d[1]
