@@ -25,6 +25,8 @@
 6. Shape gaits on soil (soil_body_contact): mini-eels-sand-crawl and regolith-sidewinding at their own
    settings (--quick: 5 s, else 20 s), each with its shipped skin, Mohr–Coulomb alone and the rut walls'
    passive pressure: the centre of mass's displacement, the rut and the real-time factor.
+7. Held still on a slope: EELS 1.0 with idle screws on the snow laid on a 5° plane; the creep after settling
+   against the shear's v_eps and the integrator's Jacobian refresh (every 8th step: the scene's; every step).
 
 Writes bench/results/soft_terrain.json and bench/results/soft_terrain.png (or the given files). --quick:
 fewer points and shorter runs (under a minute on 2 shared cores).
@@ -269,6 +271,32 @@ def shape_gaits(quick: bool) -> list[dict]:
     return rows
 
 
+# -- 7. held still on a slope ------------------------------------------------------------------------------
+def hold(quick: bool) -> list[dict]:
+    """EELS 1.0, screws idle, on the snow field laid on a 5° plane: the creep after settling against the
+    shear's regularisation v_ε and how often the integrator refreshes its Jacobian (the scene's: every 8th
+    step); the creep's bound is v_ε (tests/terramechanics/test_hold_on_slope.py)."""
+    duration = 6.0 if quick else 12.0
+    text = (ROOT / "terrains" / "snow-field.yaml").read_text()
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "snow-slope.yaml"
+        path.write_text(text.replace("base_height: 0.0", "base: {kind: plane, tilt: 0.0873, azimuth: 1.5708}"))
+        for v_eps, every in ((0.01, 8), (0.01, 1), (0.001, 8), (0.001, 1)):
+            s = load_session("snow-screw-traverse", overrides=[
+                f"settle={duration}", f"terrain={path}", f"components.contact.params.v_eps={v_eps}",
+                f"sim.integrator.params.jacobian_every={every}"], sim_overrides={"duration": duration})
+            t0 = time.perf_counter()
+            r = s.run()
+            wall = time.perf_counter() - t0
+            t, pose = r["t"], r["tail_pose.pose"]
+            i = int(np.searchsorted(t, 2.0))
+            rows.append({"v_eps_m_s": v_eps, "jacobian_every": every, "outcome": r.summary["outcome"],
+                         "creep_mm_s": float(np.linalg.norm(pose[-1, :2] - pose[i, :2]) / (t[-1] - t[i]) * 1e3),
+                         "real_time_factor": duration / wall})
+    return rows
+
+
 # -- report -------------------------------------------------------------------------------------------------
 def table(out: dict) -> str:
     d = out["drawbar"]
@@ -304,6 +332,10 @@ def table(out: dict) -> str:
     lines += [f"   {r['scene']:24s} {r['lateral']:10s} {r['duration_s']:4.0f}  {r['com_displacement_m']:10.3f}  "
               f"{r['com_dx_m']:+7.3f}  {100 * r['max_sinkage_m']:11.2f}  {r['rut']['deformed_nodes']:9d}  "
               f"{r['real_time_factor']:5.1f}  {r['outcome']}" for r in out["shape_gaits"]]
+    lines += ["7. held still on a 5° snow slope, screws idle (the creep's bound: v_eps)",
+              "   v_eps m/s   Jacobian every   creep mm/s   RTF   outcome"]
+    lines += [f"   {r['v_eps_m_s']:8.3f}   {r['jacobian_every']:14d}   {r['creep_mm_s']:10.2f}  "
+              f"{r['real_time_factor']:5.1f}  {r['outcome']}" for r in out["hold"]]
     return "\n".join(lines)
 
 
@@ -355,7 +387,8 @@ def main(argv=None) -> int:
     t0 = time.perf_counter()
     a.json.parent.mkdir(parents=True, exist_ok=True)
     out = {"quick": a.quick, "drawbar": drawbar(a.quick), "speed": speeds(a.quick), "cost": cost(a.quick),
-           "traverse": traverse(a.quick, a.json), "wheel": wheel(a.quick), "shape_gaits": shape_gaits(a.quick)}
+           "traverse": traverse(a.quick, a.json), "wheel": wheel(a.quick), "shape_gaits": shape_gaits(a.quick),
+           "hold": hold(a.quick)}
     out["bench_wall_s"] = time.perf_counter() - t0
     print(table(out))
     print(f"bench wall time {out['bench_wall_s']:.1f} s")
