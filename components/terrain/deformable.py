@@ -10,29 +10,30 @@ a DEM) that keeps the ruts a robot leaves.
     cell: 0.02                # m, node spacing
     max_tiles: 2048           # tiles of 32 × 32 nodes that may be touched in a run (memory cap)
     initial_state: null       # a run's soil_state.npz (relative to this file): start on its ruts
+    bulldozing: null          # {erosion_angle: 35, flow_factor: 1, erosion_iterations: 5}: berms (bulldozing.py)
     soil: {k_c: 4.37e3, k_phi: 196.72e3, n: 1.6, cohesion: 1.03e3, friction_angle: 19.7,
-           janosi_k: 0.025, elastic_k: 5.0e5, damping: 0.0}
+           janosi_k: 0.025, elastic_k: 5.0e5, damping: 0.0, density: 300}    # or {include: soils/snow-us.yaml}
 
 Model: Bekker–Wong pressure–sinkage, Mohr–Coulomb shear strength and Janosi–Hanamoto shear (the
-terramechanics contact, components/terramechanics/, reads ``soil``); the nodes' plastic sinkage and yield
-memory (deformable_kernels.py: the law and its elastic unloading as in Chrono's SCM) live in
+terramechanics contact, components/terramechanics/, reads ``soil``); the nodes' plastic sinkage, yield
+memory and heaped soil (deformable_kernels.py: the law and its elastic unloading as in Chrono's SCM) live in
 ``terrain.state`` and change in place when the contact commits a step (``state.changed``), so the
 surface every consumer queries (contact, viewer, lidar) is the rutted one. Storage is sparse: a node
 table of tiles, a tile allocated from a pool of ``max_tiles`` on its first load, so a 20 × 20 m patch at
-2 cm costs memory where the robot went (a tile is 32 × 32 nodes × 2 arrays × 8 B = 16 KiB; the pool is
+2 cm costs memory where the robot went (a tile is 32 × 32 nodes × 3 arrays × 8 B = 24 KiB; the pool is
 allocated with calloc, so untouched tiles are not even resident).
 
 Base: any terrain whose kind gives a height field (``Terrain.height_grid``: dem, plane) is read at the
 nodes (bilinearly; a DEM finer than ``cell`` is smoothed to the nodes, one whose samples fall on nodes is
-reproduced exactly). The soil law then acts along the base's normal, as SCM's grid over a height map:
-sinkage s = cos(slope)·(base − z) (deformable_kernels.py).
+reproduced exactly). The soil law then acts along the base's normal, as SCM's grid over a height map
+(deformable_kernels.py).
 
-Query: the unloaded surface base − s_p, bilinear between nodes; distance and normal first-order as a
+Query: the unloaded surface base + lift − s_p, bilinear between nodes; distance and normal first-order as a
 DEM's (d = (z − h)/√(1 + |∇h|²)). Units SI, world frame, z up.
 
 Bulldozing (``bulldozing:``, off by default: the rut's volume is compacted, as SCM without its option): the
 soil a step presses out is heaped on the contact patch's rim and eroded to the angle of repose
-(bulldozing.py); berms stand above the virgin surface (plastic < 0).
+(bulldozing.py); berms stand above the base (lift > plastic).
 
 Not modelled here: soil sliding down a slope of itself (the base's slopes are not eroded).
 """
