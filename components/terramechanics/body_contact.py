@@ -62,7 +62,7 @@ from snakesim.components.terrain.bulldozing import SoilFlowLog
 from snakesim.components.terrain.deformable import DeformableTerrain
 
 from .body_kernels import L_NODES, L_NORMAL, L_SINKAGE, body_soil
-from .contact import NO_LOG, after_commit, check_cell, write_soil_files
+from .contact import NO_LOG, after_commit, check_cell, require_soil, write_soil_files
 from .kernels import SCRATCH_COLUMNS, scratch_rows
 
 
@@ -154,10 +154,7 @@ class SoilBodyContact(Component[SoilBodyContactParams]):
     def _bind(self, run: _Run, terrain) -> DeformableTerrain:
         if terrain is run.terrain:
             return terrain
-        if not isinstance(terrain, DeformableTerrain):
-            raise ConfigError(f"{self.name}: the terrain is a '{getattr(terrain, 'kind', type(terrain).__name__)}'; "
-                              "soil_body_contact needs kind 'deformable' (e.g. terrains/sand-field.yaml); on a rigid "
-                              "terrain use body_contact")
+        require_soil(self, terrain, "terrains/sand-field.yaml", "body_contact")
         g = self.pieces
         check_cell(terrain, g.geo[:, 0], g.geo[:, 1], g.names, what="body cylinder")
         run.walls = self._walls(terrain)

@@ -106,6 +106,15 @@ class ScrewGeometry:
         self.radius, self.length = np.asarray(layout.radius), np.asarray(layout.length)
 
 
+def require_soil(component, terrain, example: str, rigid: str) -> None:
+    """A soil contact's terrain must be a deformable one: else a ConfigError naming the kind it got, an
+    example terrain file and the contact for rigid terrain."""
+    if not isinstance(terrain, DeformableTerrain):
+        raise ConfigError(f"{component.name}: the terrain is a '{getattr(terrain, 'kind', type(terrain).__name__)}'; "
+                          f"{component.type_name} needs kind 'deformable' (e.g. {example}); on a rigid terrain use "
+                          f"{rigid}")
+
+
 def check_cell(terrain: DeformableTerrain, radius: np.ndarray, length: np.ndarray, names, what: str = "screw") -> None:
     """The terrain's cell must resolve every screw (or body cylinder): no larger than its diameter and length."""
     smallest = np.minimum(2.0 * radius, length)
@@ -210,10 +219,7 @@ class TerramechanicsContact(Component[TerramechanicsContactParams]):
     def _bind(self, run: _Run, terrain) -> DeformableTerrain:
         if terrain is run.terrain:
             return terrain
-        if not isinstance(terrain, DeformableTerrain):
-            raise ConfigError(f"{self.name}: the terrain is a '{getattr(terrain, 'kind', type(terrain).__name__)}'; "
-                              "terramechanics_contact needs kind 'deformable' (e.g. terrains/snow-field.yaml); on a "
-                              "rigid terrain use screw_sdf_contact")
+        require_soil(self, terrain, "terrains/snow-field.yaml", "screw_sdf_contact")
         g = self.geometry
         check_cell(terrain, g.radius, g.length, g.names)
         rows = scratch_rows(g.radius, g.length, terrain.cell)

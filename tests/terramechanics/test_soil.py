@@ -150,3 +150,16 @@ def test_a_missing_soil_include_names_the_key_and_the_path(tmp_path):
         load_terrain(str(tmp_path / "snow.yaml"))
     msg = str(e.value)
     assert "snow.yaml" in msg and "soil.include" in msg and "no-such-soil.yaml" in msg
+
+
+@pytest.mark.parametrize("scene,contact,rigid", [("snow-screw-traverse", "terramechanics_contact", "screw_sdf_contact"),
+                                                 ("mini-eels-sand-crawl", "soil_body_contact", "body_contact")])
+def test_a_soil_contact_on_a_rigid_terrain_names_the_kind_and_the_alternative(scene, contact, rigid):
+    from snakesim.framework.errors import SnakesimError
+    from snakesim.framework.session import load_session
+
+    s = load_session(scene, overrides=["terrain=flat-ice"], sim_overrides={"duration": 0.02})
+    with pytest.raises(SnakesimError) as e:
+        s.run()
+    msg = str(e.value)
+    assert "'plane'" in msg and contact in msg and "deformable" in msg and rigid in msg
