@@ -31,6 +31,8 @@ import numpy as np
 from snakesim.components.contact.body_samples import BodySampleOptions, body_samples
 from snakesim.components.multibody.robot_model import RobotModel
 
+from .batched_fd import padded_groups
+
 #: tail orientation of the fit: link x (the robot axis) -> world z, link y (bend axes) -> world x
 UPRIGHT_IN_GAP = (-0.5, -0.5, -0.5, 0.5)
 TAIL_Z = 0.1            # m
@@ -91,14 +93,14 @@ def fit_planar_brace(robot: RobotModel, gap: float, walls: dict[int, int], bend_
         q[iq] = x[1:]
         return q
 
+    # each link's samples as one (k, 3) block (padded): y = block @ R[1] + t[1] for every link in one product
+    padded, slot = padded_groups(np.searchsorted(rows, link_of), S.points, len(rows))
+    row_frames = [frames[row] for row in rows]
+
     def lateral(x):
         pin.framesForwardKinematics(model, data, configuration(x))
-        y = np.empty(len(link_of))
-        for row in rows:
-            m = link_of == row
-            M = data.oMf[frames[row]]
-            y[m] = S.points[m] @ M.rotation[1] + M.translation[1]
-        return y
+        H = np.array([data.oMf[f].homogeneous for f in row_frames])
+        return ((padded @ H[:, 1, :3, None])[..., 0] + H[:, 1, 3, None]).reshape(-1)[slot]
 
     def residuals(x):
         y = lateral(x)

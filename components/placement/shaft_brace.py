@@ -35,6 +35,8 @@ Steps (world frame, z up; m, rad, N):
    carries the load N_k of step 4 (first pass: the mean load). Where a rough wall leaves no such state
    (a depth missed by > 0.5 mm, a body inside the clearance), the brace is moved a few cm along the wall
    (``SHIFTS``) and refined again; the first spot that fits is taken (``ShaftPlacement.shift``).
+   The Jacobian is scipy's forward differences, its steps posed and queried as one batch (batched_fd.py:
+   the same numbers as one step at a time, ~4× faster); a step's d_p is measured only near the walls.
 4. pre-load (handoff.gravity_preload): the joint torques that hold the refined state still WITH gravity,
    the bracing screws' loads N_k ≥ 0 summing to ``preload`` N, contacts at the rings' extremal points. Steps
    3-4 run twice (the second with each screw's own δ_k), so the state handed over is the static
@@ -60,6 +62,7 @@ from snakesim.components.contact.robot_screws import screw_layout
 from snakesim.components.multibody.robot_model import RobotModel
 from snakesim.framework import Params
 
+from .batched_fd import forward_differences, padded_groups, row_dot
 from .brace_fit import fit_planar_brace, sampled_robot
 from .fit import Placement, PlacementError
 from .handoff import gravity_preload
@@ -70,6 +73,9 @@ from .shapes import register_placer
 #: rad: the fit's bends stay this far inside their URDF limits (0.74 of EELS 1.5's ±0.785, as
 #: placement-walls-body's fit), room for the pre-load's squeeze and brace_climb's limit guard
 LIMIT_MARGIN = 0.045
+#: m: a free sample farther than this beyond the clearance is not measured in a Jacobian's steps (they move
+#: it < 1e-6 m: its term stays 0)
+NEAR = 0.01
 #: m, (along the wall, up) shifts of the brace tried in turn when the refinement misses (a rough wall)
 SHIFTS = ((0.0, 0.0), (0.0, 0.03), (0.0, -0.03), (0.05, 0.0), (-0.05, 0.0), (0.0, 0.06), (0.0, -0.06),
           (0.1, 0.0), (-0.1, 0.0))
@@ -209,63 +215,106 @@ def _place(robot: RobotModel, spec: ShaftBrace) -> ShaftPlacement:
     p0 = sv.centre + R.apply(np.asarray(fit.pose["position"]) - anchor)
     R0 = R * Rotation.from_quat(fit.pose["quaternion"])
 
+    # 3. what the refinement measures, for a batch of m refinement vectors X (m, 6 + bends) at once: one
+    # kinematics pass per vector, then every sample and ring of the batch in one terrain query, rounded as one
+    # vector at a time (batched_fd.py), so the refinement takes today's path whatever the batch
+    posed = np.union1d(rows, list(touching))                  # the links whose frames are read
+    posed_frames = [frames[link] for link in posed]
+    screw_link = np.searchsorted(posed, [robot.links.index(meta[k]["link"]) for k in bracing])   # their columns
+    screw_r = np.array([radius[k] for k in bracing])
+    screw_rings = np.array([rings[k] for k in bracing])       # (b, 3) ring offsets along the axis
+    k_of_material = np.array([m.k for m in terrain.materials])
+    free_link, free_points = np.searchsorted(posed, link_of[free]), S.points[free]
+    every_free = padded_groups(free_link, free_points, len(posed))
+
     def state(x, start):
         q = q_fit.copy()
         q[bends] += x[6:]
         return start + x[:3], Rotation.from_rotvec(x[3:6]) * R0, q
 
-    def measures(x, start):
-        pos, Rt, q = state(x, start)
-        pin.framesForwardKinematics(model, data, configuration(pos, Rt.as_quat(), q))
-        pts = np.empty((len(link_of), 3))
-        for row in rows:
-            m = link_of == row
-            M = data.oMf[frames[row]]
-            pts[m] = S.points[m] @ M.rotation.T + M.translation
-        depth, contact, normal, k_wall = {}, {}, {}, {}
-        for row, k in touching.items():
-            M = data.oMf[frames[row]]
-            a = M.rotation[:, 0]                                   # the screw axis: the screw link's x
-            c = M.translation + np.outer(rings[k], a)
-            qr = terrain.query(c)
-            reach = radius[k] * np.sqrt(np.clip(1.0 - (qr.normal @ a) ** 2, 0.0, 1.0)) - qr.distance
-            i = int(np.argmax(reach))
-            e = -qr.normal[i] + (qr.normal[i] @ a) * a              # towards the wall, normal to the axis
-            depth[k], normal[k] = float(reach[i]), qr.normal[i]
-            contact[k] = c[i] + radius[k] * e / max(np.linalg.norm(e), 1e-12)
-            k_wall[k] = terrain.materials[int(qr.material[i])].k
-        over = np.maximum(spec.clearance - terrain.distance(pts[free]), 0.0)
-        return depth, contact, normal, k_wall, over
+    def frames_of(X, start):
+        """Rotations (m, L, 3, 3) and origins (m, L, 3) of the ``posed`` links' frames per vector of X."""
+        quat = (Rotation.from_rotvec(X[:, 3:6]) * R0).as_quat()
+        q = np.tile(q_fit, (len(X), 1))
+        q[:, bends] += X[:, 6:]
+        H = np.empty((len(X), len(posed), 4, 4))
+        for i, x in enumerate(X):
+            pin.framesForwardKinematics(model, data, configuration(start + x[:3], quat[i], q[i]))
+            H[i] = [data.oMf[f].homogeneous for f in posed_frames]
+        return H[..., :3, :3], H[..., :3, 3]
+
+    def measures(X, start, samples=every_free):
+        """Per vector of X (rows), in ``bracing`` order: each screw's envelope depth D (m, b), contact
+        point (m, b, 3), wall normal there (m, b, 3) and wall stiffness (m, b); and the terrain's distance
+        at the free samples ``samples`` (padded_groups of them; default all) (m, k)."""
+        rot, org = frames_of(X, start)
+        padded, slot = samples
+        pts = (padded @ rot.swapaxes(-1, -2) + org[:, :, None, :]).reshape(len(X), -1, 3)[:, slot]
+        a = rot[:, screw_link][..., 0]                                # the screw axes: the screw links' x
+        c = org[:, screw_link, None, :] + screw_rings[None, :, :, None] * a[:, :, None, :]    # (m, b, 3, 3)
+        qr = terrain.query(np.concatenate([c.reshape(-1, 3), pts.reshape(-1, 3)]))
+        nc = c.size // 3
+        d, n = qr.distance[:nc].reshape(c.shape[:3]), qr.normal[:nc].reshape(c.shape)
+        reach = screw_r[:, None] * np.sqrt(np.clip(1.0 - (n @ a[..., None])[..., 0] ** 2, 0.0, 1.0)) - d
+        deepest = np.arange(len(X))[:, None], np.arange(len(bracing)), np.argmax(reach, axis=2)   # its ring
+        n_i = n[deepest]
+        e = -n_i + row_dot(n_i, a)[..., None] * a                     # towards the wall, normal to the axis
+        contact = c[deepest] + screw_r[:, None] * e / np.maximum(np.sqrt(row_dot(e, e)), 1e-12)[..., None]
+        k_wall = k_of_material[qr.material[:nc].reshape(c.shape[:3])[deepest]]
+        return reach[deepest], contact, n_i, k_wall, qr.distance[nc:].reshape(len(X), -1)
 
     def refine(target, x0, start):
         from scipy.optimize import least_squares
 
-        def residuals(x):
-            depth, _, _, _, over = measures(x, start)
-            return np.concatenate([[1e3 * (depth[k] - target[k]) for k in bracing], 1e4 * over, x[:3], 10 * x[3:6],
-                                   1e-2 * x[6:]])
+        def residuals(X, depth, dist):
+            return np.concatenate([1e3 * (depth - target), 1e4 * np.maximum(spec.clearance - dist, 0.0), X[:, :3],
+                                   10 * X[:, 3:6], 1e-2 * X[:, 6:]], axis=1)
+
+        last = {}
+
+        def fun(x):
+            depth, _, _, _, dist = measures(x[None], start)
+            last.update(x=x.copy(), dist=dist[0], f=residuals(x[None], depth, dist)[0])
+            return last["f"]
+
+        def jac(x):
+            """Forward differences (as scipy's '2-point') from the residuals at x (the last ones evaluated:
+            trf asks at the point it just accepted). A step moves a sample < 1e-6 m, so only samples within
+            NEAR of the clearance there can change their term: the others' stay 0, unmeasured."""
+            if not ("x" in last and np.array_equal(last["x"], x)):
+                fun(x)
+            f0, near = last["f"], last["dist"] < spec.clearance + NEAR
+
+            def stepped(X):
+                depth, _, _, _, d_near = measures(X, start, padded_groups(free_link[near], free_points[near],
+                                                                          len(posed)))
+                dist = np.full((len(X), len(near)), np.inf)
+                dist[:, near] = d_near
+                return residuals(X, depth, dist)
+
+            return forward_differences(stepped, x, f0, lb, ub)
 
         lb = np.concatenate([np.full(6, -np.inf), lo[bends] - q_fit[bends]])
         ub = np.concatenate([np.full(6, np.inf), hi[bends] - q_fit[bends]])
-        return least_squares(residuals, np.clip(x0, lb + 1e-9, ub - 1e-9), bounds=(lb, ub), max_nfev=300).x
+        return least_squares(fun, np.clip(x0, lb + 1e-9, ub - 1e-9), bounds=(lb, ub), jac=jac, max_nfev=300).x
 
     def settle(start):
         """Refine at ``start`` (the tail's position before refining) and solve the pre-load, twice: the state, its
         loads and torques, and how far it misses (depth per screw beyond 0.5 mm, the worst clearance overrun)."""
         x = np.zeros(6 + len(bends))
-        _, _, _, k_wall, _ = measures(x, start)
-        target = {k: spec.preload / len(bracing) / k_wall[k] for k in bracing}
+        k_wall = measures(x[None], start)[3][0]
+        target = spec.preload / len(bracing) / k_wall
         for _ in range(2):
             x = refine(target, x, start)
-            depth, contact, normal, k_wall, over = measures(x, start)
+            depth, contact, normal, k_wall, dist = (v[0] for v in measures(x[None], start))
             pos, Rt, q = state(x, start)
             st = {"q": [float(v) for v in q],
                   "pose": {"position": [float(v) for v in pos], "quaternion": [float(v) for v in Rt.as_quat()]}}
-            tau, N, mu = gravity_preload(robot, st, carriers, np.array([contact[k] for k in bracing]),
-                                         np.array([normal[k] for k in bracing]), spec.preload)
-            target = {k: float(n) / k_wall[k] for k, n in zip(bracing, N)}
-        miss = {k: round(depth[k] - target[k], 5) for k in bracing if abs(depth[k] - target[k]) > 5e-4}
-        return st, depth, contact, N, tau, mu, miss, float(over.max(initial=0.0))
+            tau, N, mu = gravity_preload(robot, st, carriers, contact, normal, spec.preload)
+            target = np.asarray(N, float) / k_wall
+        miss = {k: round(float(dk - tk), 5) for k, dk, tk in zip(bracing, depth, target) if abs(dk - tk) > 5e-4}
+        over = np.maximum(spec.clearance - dist, 0.0).max(initial=0.0)
+        return st, dict(zip(bracing, depth.tolist())), contact, N, tau, mu, miss, float(over)
 
     # a rough wall (a scan) may leave no fit exactly there: the first of a few nearby spots along the wall that fits
     tried = []
@@ -282,5 +331,5 @@ def _place(robot: RobotModel, spec: ShaftBrace) -> ShaftPlacement:
     sign = {name: float(spec.brace.screws.get(i, 0)) for i, name in enumerate(lay.names)}
     return ShaftPlacement(q=st["q"], pose=st["pose"], survey=sv, loads={k: float(n) for k, n in zip(bracing, N)},
                           torques=[float(t) for t in tau], depth=depth, overrun=over,
-                          contacts=np.array([contact[k] for k in bracing]), friction=mu, wall_sign=sign,
+                          contacts=contact, friction=mu, wall_sign=sign,
                           shift=(float(d_long), float(d_up)))
