@@ -163,3 +163,16 @@ def test_a_soil_contact_on_a_rigid_terrain_names_the_kind_and_the_alternative(sc
         s.run()
     msg = str(e.value)
     assert "'plane'" in msg and contact in msg and "deformable" in msg and rigid in msg
+
+
+def test_a_soil_include_that_is_not_a_mapping_names_the_file_and_key(tmp_path):
+    from snakesim.framework.errors import SnakesimError
+
+    (tmp_path / "soils").mkdir()
+    (tmp_path / "soils" / "list.yaml").write_text("- 4.37e3\n- 196.72e3\n")
+    field = (TERRAINS / "snow-field.yaml").read_text()
+    (tmp_path / "snow.yaml").write_text(field.replace("soils/snow-us.yaml", "soils/list.yaml"))
+    with pytest.raises(SnakesimError) as e:
+        load_terrain(str(tmp_path / "snow.yaml"))
+    msg = str(e.value)
+    assert "list.yaml" in msg and "soil" in msg and "mapping" in msg
