@@ -18,7 +18,8 @@ A state it missed (the sim published t = 0 before this node's reader had matched
 empty JointState (the sim rejects it with a warning, and it releases the period all the same).
 It stops the screws once the head is within ``goal_radius`` of the goal, answers a few more periods
 and leaves; with ``--log FILE`` it writes what it did (JSON: the stamps it answered, each /clock it saw
-against its last answer, the head's track, the path), with ``--picture FILE`` a PNG of the map, path
+against its last answer, the head's track, the path, and from the clouds' ground-truth ``label`` field the
+obstacles each mapped scan showed: never used to map, only to score the map), with ``--picture FILE`` a PNG of the map, path
 and track. Units: m, rad, s; frame ``world``.
 """
 
@@ -61,14 +62,19 @@ def transform(tf) -> tuple[np.ndarray, np.ndarray]:
     return rotation((r.x, r.y, r.z, r.w)), np.array([t.x, t.y, t.z])
 
 
-def cloud_points(msg: PointCloud2) -> np.ndarray:
-    """x, y, z [n, 3] of a PointCloud2's returns (NaN points, the beams without a return, dropped)."""
+def cloud_points(msg: PointCloud2) -> tuple[np.ndarray, np.ndarray | None]:
+    """x, y, z [n, 3] of a PointCloud2's returns (NaN points, the beams without a return, dropped), and their
+    ``label`` [n] (uint16, the simulator's ground truth of what each beam hit) where the cloud has one."""
     offs = {f.name: f.offset for f in msg.fields}
-    dt = np.dtype({"names": ["x", "y", "z"], "formats": ["<f4"] * 3,
-                   "offsets": [offs["x"], offs["y"], offs["z"]], "itemsize": msg.point_step})
+    names, formats = ["x", "y", "z"], ["<f4"] * 3
+    if "label" in offs:
+        names, formats = names + ["label"], formats + ["<u2"]
+    dt = np.dtype({"names": names, "formats": formats, "offsets": [offs[n] for n in names],
+                   "itemsize": msg.point_step})
     cloud = np.frombuffer(msg.data, dtype=dt, count=msg.width * msg.height)
     xyz = np.stack([cloud["x"], cloud["y"], cloud["z"]], axis=1).astype(float)
-    return xyz[np.isfinite(xyz).all(axis=1)]
+    ok = np.isfinite(xyz).all(axis=1)
+    return xyz[ok], (cloud["label"][ok] if "label" in offs else None)
 
 
 def stamp_key(stamp) -> int:
@@ -106,6 +112,7 @@ class AutonomyNode:
         self.track: list[tuple] = []           # (t, head x, y, tail x, y, bend) per period, m and rad
         self.reached_at = None
         self.scans = 0
+        self.evidence: dict[int, list] = {}    # obstacle label -> its range (m) in each mapped scan that showed it
         self.wall, self.cues = [], []           # wall time of each answer; what prompted it
 
     # -- inputs -----------------------------------------------------------------------------------
@@ -154,13 +161,32 @@ class AutonomyNode:
             pose = self.frame_in_world(msg.header.frame_id, links)
             if pose is None or self.head is None:
                 continue
-            local = cloud_points(msg)
-            local = local[np.hypot(local[:, 0], local[:, 1]) < self.args.max_range]
-            world = local @ pose[0].T + pose[1]
+            local, label = cloud_points(msg)
+            keep = np.hypot(local[:, 0], local[:, 1]) < self.args.max_range
+            world = local[keep] @ pose[0].T + pose[1]
             body = cKDTree(np.array([p for _, p in links.values()]))
             near, _ = body.query(world, distance_upper_bound=self.args.self_radius)
-            self.map.add(world[np.isinf(near)])          # inf: no link within self_radius
+            mapped = np.isinf(near)                      # inf: no link within self_radius
+            self.map.add(world[mapped])
             self.scans += 1
+            if label is not None:
+                self.count_evidence(world[mapped], label[keep][mapped], pose[1])
+
+    def count_evidence(self, world: np.ndarray, label: np.ndarray, origin: np.ndarray) -> None:
+        """Score, never map: from the cloud's ground-truth labels, note each obstacle (label 2000 + i) that this
+        mapped scan showed standing clear of the ground (``evidence_returns`` returns more than 2·max_step above
+        the median of the scan's terrain returns, labels 1..999), with the horizontal range (m) of the nearest
+        of them from the lidar at ``origin``. The log's ``evidence`` (label -> one range per scan) says what
+        the map was shown, so its recall can be judged."""
+        terrain = (label >= 1) & (label < 1000)
+        if not terrain.any():
+            return
+        high = (label >= 2000) & (world[:, 2] > np.median(world[terrain, 2]) + 2 * self.map.p.max_step)
+        reach = np.hypot(*(world[high, :2] - origin[:2]).T)
+        for i in np.unique(label[high]):
+            mine = label[high] == i
+            if mine.sum() >= self.args.evidence_returns:
+                self.evidence.setdefault(int(i), []).append(round(float(reach[mine].min()), 3))
 
     def take_clock(self) -> None:
         last = self.answered[-1] if self.answered else -np.inf
@@ -238,7 +264,7 @@ class AutonomyNode:
         result = {"reached": self.reached_at is not None, "reached_at": self.reached_at, "head": head,
                   "goal": list(a.goal), "answered": self.answered, "clock_vs_answer": self.clock_vs_answer,
                   "track": self.track, "path": self.path.tolist() if self.path is not None else None,
-                  "scans": self.scans, "wall": self.wall, "cues": self.cues,
+                  "scans": self.scans, "evidence": self.evidence, "wall": self.wall, "cues": self.cues,
                   "obstacles": self.map.center(*np.nonzero(self.map.obstacles())).tolist()}
         if a.log:
             with open(a.log, "w") as f:
@@ -261,6 +287,8 @@ def parse(argv=None):
                     help="m, lethal radius around obstacles (the robot's swept half-width)")
     ap.add_argument("--self-radius", type=float, default=0.25, help="m: returns this close to a link are the robot")
     ap.add_argument("--max-range", type=float, default=6.0, help="m: farther returns are not mapped")
+    ap.add_argument("--evidence-returns", type=int, default=10,
+                    help="returns clear of the ground that make a scan's evidence of an obstacle (--log's evidence)")
     ap.add_argument("--settle", type=float, default=1.0, help="s of sim time before driving (the robot settles)")
     ap.add_argument("--replan", type=float, default=1.0, help="s of sim time between plans")
     ap.add_argument("--linger", type=float, default=0.5, help="s of sim time answered after arriving")

@@ -121,16 +121,19 @@ def test_the_node_reaches_the_goal_past_the_course_in_lockstep_without_touching_
     clock = np.array([c for c in result["clock_vs_answer"] if np.isfinite(c[1])])
     assert len(clock) > 100 and (clock[:, 0] - clock[:, 1]).max() <= PERIOD + 1e-6
 
-    # the map is the lidar's: most of its obstacle cells lie on the course's obstacles (within 3 cells), and
-    # every obstacle that came within 2.9 m of the head (the lidar maps to 6 m; farther ones hide behind
-    # nearer ones) is in it
+    # the map is the lidar's: most of its obstacle cells lie on the course's obstacles (within 3 cells), and it
+    # holds every obstacle the lidar showed it up close. Which those were comes from the clouds' ground-truth
+    # labels (the node logs, per mapped scan, each obstacle with >= 10 returns clear of the ice and their
+    # nearest range): a distance to the track alone cannot say, as the robot's path varies with the timing of
+    # the clouds between runs and an obstacle 2.9 m from it may hide behind a nearer one. Shown up close: in
+    # >= 5 scans within 3 m (the map needs a step within 35 cm and 2 scans; ring spacing grows with range)
     cells = np.array(result["obstacles"])
     on_ground = np.column_stack([cells, np.full(len(cells), 0.02)])
     assert (obstacle_distance(on_ground) < 0.15).mean() > 0.85
     course = yaml.safe_load(TERRAIN.read_text())
-    track = np.array(result["track"])[:, 1:3]
-    passed = [(o, box_distance(on_ground, o["center"], o["size"], o["yaw"]).min()) for o in course["boxes"]]
-    passed += [(o, (np.linalg.norm(on_ground - o["center"], axis=-1) - o["radius"]).min()) for o in course["spheres"]]
-    passed = [(o, d) for o, d in passed if np.linalg.norm(track - o["center"][:2], axis=1).min() < 2.9]
-    assert len(passed) >= 6 and all(d < 0.1 for _, d in passed), passed
+    mapped = [box_distance(on_ground, o["center"], o["size"], o["yaw"]).min() for o in course["boxes"]]
+    mapped += [(np.linalg.norm(on_ground - o["center"], axis=-1) - o["radius"]).min() for o in course["spheres"]]
+    shown = [int(label) - 2000 for label, ranges in result["evidence"].items()
+             if (np.array(ranges) < 3.0).sum() >= 5]
+    assert len(shown) >= 6 and all(mapped[i] < 0.1 for i in shown), [(i, mapped[i]) for i in shown]
     assert picture.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
