@@ -301,25 +301,29 @@ def screw_soil(grid, base_z, soil, tile_of, plastic, yield_p, lift, used, rows, 
                                             scratch)
         if m == 0:
             continue
-        # the patch: a cylinder pressed ``pen`` into the surface meets it over the chord 2√(2 r pen − pen²)
-        # across, the half angle θ0 = acos(1 − pen / r) round the envelope from the bottom; Bekker's b is the
-        # smaller of the chord and the axial extent (a node stands for one cell). Both are continuous in the
-        # pose (the deepest penetration is), so the force is: no jumps as nodes enter the patch
-        pc = min(pen, r)
+        # the patch: a cylinder sunk ``deepest`` below the virgin surface meets the soil over the chord
+        # 2√(2 r d − d²) across, the half angle θ0 = acos(1 − d / r) round the envelope from the bottom; Bekker's
+        # b is the smaller of the chord and the axial extent (a node stands for one cell). The sinkage below the
+        # virgin surface, not the penetration below the rut: a screw lying in the groove it pressed fills it
+        # wall to wall though it presses only σ/K_e (mm) into it, and a patch of that elastic depth halved the
+        # thrust in the rut (tests/terramechanics/test_towed_module.py). Both are continuous in the pose (the
+        # deepest sinkage is), so the force is: no jumps as nodes enter the patch
+        deepest = 0.0
+        for q in range(m):
+            deepest = max(deepest, scratch[q, _SINK])
+        pc = min(deepest, r)
         chord = 2.0 * math.sqrt(max(0.0, 2.0 * r * pc - pc * pc))
         b = max(cell, min(chord, s_hi - s_lo + cell))
         u_hi = r * math.acos(1.0 - pc / r)
         u_lo = -u_hi
         fx = fy = fz = tx = ty = tz = 0.0
         ox, oy, oz = poses[sr, 0], poses[sr, 1], poses[sr, 2]
-        deepest = 0.0
         for q in range(m):
             i, j = int(scratch[q, _I]), int(scratch[q, _J])
             zb, sax, u = scratch[q, _ZB], scratch[q, _SAX], scratch[q, _U]
             X, Y, sink = scratch[q, _PX], scratch[q, _PY], scratch[q, _SINK]        # sink: along the normal N
             N0, N1, ca = scratch[q, _N0], scratch[q, _N1], scratch[q, _N2]
             area = cell_area / ca             # the soil surface the node's cell stands for, m²
-            deepest = max(deepest, sink)
             s_p, s_y = node_state(tile_of, plastic, yield_p, i, j)
             s_p = ca * s_p
             sigma = pressure(soil, b, sink, s_p, s_y)[0]

@@ -2,8 +2,9 @@
 the screw–soil shear is regularised near rest (slope τ_max ℓ / (K v_ε) per node area: contact.py), so under a
 load within the soil's capacity it does not stick but creeps, at a speed below v_ε (the viscous branch
 carries F = F_max v / v_ε, and F < F_max while it holds). The check: the creep after settling stays under
-v_ε at the scene's settings, and under the smaller v_ε of the hold settings (v_ε = 1 mm/s, a fresh
-Jacobian every step) — which a stale Jacobian at that v_ε does not meet (docs/terramechanics.md)."""
+v_ε at the scene's settings, with its v_ε and with v_ε = 1 mm/s — which fixed 20 ms steps at that v_ε do not
+meet: their linearly implicit stages overshoot the shear's linear range |v| < v_ε and the robot creeps at
+7.5 mm/s; the scene's error control splits those steps (docs/terramechanics.md, bench/soft_terrain.py part 7)."""
 
 from __future__ import annotations
 
@@ -33,5 +34,4 @@ def creep(tmp_path, overrides):
 @pytest.mark.slow
 def test_a_robot_on_a_snow_slope_creeps_slower_than_the_shear_regularisation_allows(tmp_path):
     assert creep(tmp_path, []) < 0.01                                   # the contact's default v_ε, 10 mm/s
-    hold = ["components.contact.params.v_eps=0.001", "sim.integrator.params.jacobian_every=1"]
-    assert creep(tmp_path, hold) < 0.001
+    assert creep(tmp_path, ["components.contact.params.v_eps=0.001"]) < 0.001
