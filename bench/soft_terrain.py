@@ -27,6 +27,9 @@
    passive pressure: the centre of mass's displacement, the rut and the real-time factor.
 7. Held still on a slope: EELS 1.0 with idle screws on the snow laid on a 5° plane; the creep after settling
    against the shear's v_eps and the step (the scene's error control, fixed 20 ms, fixed 10 ms).
+8. The step on snow: snow-screw-traverse's whole schedule (45 s; --quick: 9 s) with the scene's error control
+   and with fixed steps, the tail against fixed 2 ms steps (1 cm from 1 ms), and the forward phase's speed at
+   1 rad/s (a Jacobian kept for 8 fixed 20 ms steps ran it backwards).
 
 Writes bench/results/soft_terrain.json and bench/results/soft_terrain.png (or the given files). --quick:
 fewer points and shorter runs (under a minute on 2 shared cores).
@@ -304,6 +307,56 @@ def hold(quick: bool) -> list[dict]:
     return rows
 
 
+# -- 8. the step on snow -------------------------------------------------------------------------------------
+_I = "sim.integrator.params."
+#: part 8's integrator settings (overrides, sim overrides) against fixed 2 ms steps (1 cm from 1 ms over 45 s)
+STEPS = {
+    "the scene's (error control, 1 cm / 0.1 m/s / 10 %, J every 4th)": ([], {}),
+    "fixed 20 ms, J every 8th": ([f"{_I}step_control=fixed", f"{_I}jacobian_every=8"], {}),
+    "fixed 20 ms, J every step": ([f"{_I}step_control=fixed", f"{_I}jacobian_every=1"], {}),
+    "fixed 10 ms": ([f"{_I}step_control=fixed", f"{_I}jacobian_every=1"], {"dt": 0.01}),
+    "fixed 5 ms": ([f"{_I}step_control=fixed", f"{_I}jacobian_every=1"], {"dt": 0.005}),
+    "error control, 3 mm / 0.03 m/s / 3 %": ([f"{_I}atol_q=3e-3", f"{_I}atol_v=3e-2", f"{_I}rtol=3e-2"], {}),
+}
+REFERENCE_STEP = ([f"{_I}step_control=fixed", f"{_I}jacobian_every=1"], {"dt": 0.002})
+
+
+def _tail_track(overrides, sim, duration: float, rate: float | None = None):
+    """snow-screw-traverse's tail (x, y) every 0.1 s, the real-time factor and the outcome."""
+    extra = [f"screw_speed={rate}"] if rate is not None else []
+    s = load_session("snow-screw-traverse", overrides=[*overrides, *extra], sim_overrides={"duration": duration, **sim})
+    t0 = time.perf_counter()
+    r = s.run()
+    wall = time.perf_counter() - t0
+    grid = np.arange(0.0, duration + 1e-9, 0.1)
+    t, p = r["t"], r["tail_pose.pose"]
+    track = np.column_stack([np.interp(grid, t, p[:, k]) for k in range(2)])
+    return track, duration / wall, r.summary["outcome"]
+
+
+def step_on_snow(quick: bool) -> list[dict]:
+    """Each of STEPS against fixed 2 ms: the tail's distance from it at 5 s, 9 s (the forward phase's end) and
+    at most over the run (45 s; --quick: 9 s), and the forward phase's speed at 1 rad/s (settle 1 s, the
+    late half of 4 s driving), where a stale Jacobian once ran it backwards."""
+    duration = 9.0 if quick else 45.0
+    ref, ref_rtf, _ = _tail_track(*REFERENCE_STEP, duration)
+    slow_ref = _tail_track(*REFERENCE_STEP, 5.0, rate=1.0)[0]
+    late = slice(30, 51)                       # 3 to 5 s: the late half of the forward phase
+
+    def speed(track):
+        return float(np.polyfit(np.arange(30, 51) * 0.1, track[late, 0], 1)[0])
+
+    rows = [{"step": "fixed 2 ms (reference)", "real_time_factor": ref_rtf, "off_5s_m": 0.0, "off_9s_m": 0.0,
+             "off_max_m": 0.0, "speed_1rad_s": speed(slow_ref), "outcome": "success"}]
+    for name, (overrides, sim) in STEPS.items():
+        track, rtf, outcome = _tail_track(overrides, sim, duration)
+        off = np.linalg.norm(track - ref, axis=1)
+        slow = _tail_track(overrides, sim, 5.0, rate=1.0)[0]
+        rows.append({"step": name, "real_time_factor": rtf, "off_5s_m": float(off[50]), "off_9s_m": float(off[90]),
+                     "off_max_m": float(off.max()), "speed_1rad_s": speed(slow), "outcome": outcome})
+    return rows
+
+
 # -- report -------------------------------------------------------------------------------------------------
 def table(out: dict) -> str:
     d = out["drawbar"]
@@ -343,6 +396,11 @@ def table(out: dict) -> str:
               "   v_eps m/s   step             creep mm/s   RTF   outcome"]
     lines += [f"   {r['v_eps_m_s']:8.3f}   {r['step']:<14}   {r['creep_mm_s']:10.3f}  "
               f"{r['real_time_factor']:5.1f}  {r['outcome']}" for r in out["hold"]]
+    lines += ["8. the step on snow (snow-screw-traverse's tail against fixed 2 ms; forward speed at 1 rad/s)",
+              "   step                                                        RTF   off 5 s  off 9 s   max cm  "
+              "m/s at 1 rad/s  outcome"]
+    lines += [f"   {r['step']:58s} {r['real_time_factor']:5.1f}  {100 * r['off_5s_m']:6.1f}  {100 * r['off_9s_m']:7.1f}  "
+              f"{100 * r['off_max_m']:7.1f}  {r['speed_1rad_s']:14.4f}  {r['outcome']}" for r in out["step"]]
     return "\n".join(lines)
 
 
@@ -395,7 +453,7 @@ def main(argv=None) -> int:
     a.json.parent.mkdir(parents=True, exist_ok=True)
     out = {"quick": a.quick, "drawbar": drawbar(a.quick), "speed": speeds(a.quick), "cost": cost(a.quick),
            "traverse": traverse(a.quick, a.json), "wheel": wheel(a.quick), "shape_gaits": shape_gaits(a.quick),
-           "hold": hold(a.quick)}
+           "hold": hold(a.quick), "step": step_on_snow(a.quick)}
     out["bench_wall_s"] = time.perf_counter() - t0
     print(table(out))
     print(f"bench wall time {out['bench_wall_s']:.1f} s")

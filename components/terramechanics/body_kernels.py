@@ -16,8 +16,9 @@ screws', kernels.py): per node the pressure acts along the base normal N on A = 
 a plane base), the shear f = −τ A P t / ρ (t = T u the slip in the base's tangent plane, T = I − N Nᵀ; P =
 across I + (along − across) ĥĥᵀ, ĥ the link's axis in that plane; ρ = √(|t|² + v_ε²)) has ∂f/∂u = −τ A (P T / ρ
 − (P t) tᵀ / ρ³) (finite at rest: τ A P / v_ε, the slope that sets an explicit step), the damping −R A N Nᵀ
-while loaded; the height derivative is the pressure's, −σ'(s) N_z (A N + f tan φ / τ_max), σ' = K_e (elastic)
-or n σ / s (Bekker's). Both moved to the link origin as X_cᵀ D X_c. Left out: b, j and the contact set
+while loaded; the height derivative is the pressure's, −σ'(s) N_z (A N + f tan φ / τ_max), σ' the slope of the
+branch a further load follows: K_e below the node's yield memory, Bekker's n σ / s at or past it
+(add_height_slope). Both moved to the link origin as X_cᵀ D X_c. Left out: b, j and the contact set
 following the pose (lower order).
 """
 
@@ -34,8 +35,8 @@ from snakesim.components.terrain.bulldozing_kernels import commit_logged
 from snakesim.components.terrain.deformable_kernels import (GCELL, SC, SDAMP, SKJ, STANPHI, base_normal, node_state,
                                                            pressure)
 
-from .kernels import (_I, _J, _N0, _N1, _N2, _PX, _PY, _SINK, _ZB, add_normal_damping, add_pressure_slope,
-                      add_wrench, clear_outputs, cross, cylinder_nodes, quat_rotate, soil_top)
+from .kernels import (_I, _J, _N0, _N1, _N2, _PX, _PY, _SINK, _ZB, add_height_slope, add_normal_damping, add_wrench,
+                      clear_outputs, cross, cylinder_nodes, patch_chord, quat_rotate, soil_top)
 
 # per-link output columns
 L_NORMAL, L_SINKAGE, L_NODES = range(3)
@@ -71,14 +72,11 @@ def body_soil(grid, base_z, soil, tile_of, plastic, yield_p, lift, used, piece_l
             continue                             # standing on its end: not modelled
         if cz - r * math.sqrt(1.0 - a2 * a2) - 0.5 * L * abs(a2) > soil_top(grid, base_z, cx, cy, 0.5 * L + r):
             continue                             # wholly above the virgin surface
-        m, s_lo, s_hi, pen = cylinder_nodes(grid, base_z, tile_of, plastic, yield_p, lift, cx, cy, cz, a0, a1, a2, r, L,
+        m, s_lo, s_hi, _ = cylinder_nodes(grid, base_z, tile_of, plastic, yield_p, lift, cx, cy, cz, a0, a1, a2, r, L,
                                             scratch)
         if m == 0:
             continue
-        # Bekker's b: the smaller of the chord of the deepest penetration and the axial extent (as the screws)
-        pc = min(pen, r)
-        chord = 2.0 * math.sqrt(max(0.0, 2.0 * r * pc - pc * pc))
-        b = max(cell, min(chord, s_hi - s_lo + cell))
+        deepest, b = patch_chord(scratch, m, r, cell, s_lo, s_hi)      # Bekker's b, as the screws'
         vx, vy, vz = vels[row, 0], vels[row, 1], vels[row, 2]
         wx, wy, wz = vels[row, 3], vels[row, 4], vels[row, 5]
         # the sliding direction: the piece centre's horizontal velocity; j runs from the patch's upstream edge
@@ -90,13 +88,11 @@ def body_soil(grid, base_z, soil, tile_of, plastic, yield_p, lift, used, piece_l
         for n in range(m):
             lead = min(lead, scratch[n, _PX] * sx + scratch[n, _PY] * sy)
         fx = fy = fz = tx = ty = tz = fnormal = 0.0
-        deepest = 0.0
         for n in range(m):
             i, j = int(scratch[n, _I]), int(scratch[n, _J])
             X, Y, zb, sink = scratch[n, _PX], scratch[n, _PY], scratch[n, _ZB], scratch[n, _SINK]   # sink: along N
             N0, N1, ca = scratch[n, _N0], scratch[n, _N1], scratch[n, _N2]
             area = cell_area / ca             # the soil surface the node's cell stands for, m²
-            deepest = max(deepest, sink)
             s_p, s_y = node_state(tile_of, plastic, yield_p, i, j)
             s_p = ca * s_p
             sigma = pressure(soil, b, sink, s_p, s_y)[0]
@@ -149,8 +145,8 @@ def body_soil(grid, base_z, soil, tile_of, plastic, yield_p, lift, used, piece_l
                 rc[0], rc[1], rc[2] = rx, ry, rz
                 add_lever_quadratic(rc, D, d_twist[row])
                 if sig > 0.0 and sink > s_p:
-                    add_pressure_slope(soil, sigma, sink, s_p, tau_max, area, N0, N1, ca, -tau * pu0 / rh,
-                                       -tau * pu1 / rh, -tau * pu2 / rh, rc, gk, mk, d_pose[row])
+                    add_height_slope(soil, b, sink, s_p, s_y, tau_max, area, N0, N1, ca, -tau * pu0 / rh,
+                                     -tau * pu1 / rh, -tau * pu2 / rh, rc, gk, mk, d_pose[row])
                 on_link[row] = True
             if commit:
                 f = commit_logged(grid, soil, tile_of, plastic, yield_p, used, i, j, sink, b, ca, log, log_n, k)
@@ -160,7 +156,7 @@ def body_soil(grid, base_z, soil, tile_of, plastic, yield_p, lift, used, piece_l
         add_wrench(wrenches[row], fx, fy, fz, tx, ty, tz)
         if walls[0] > 0.0:
             rut_wall(grid, base_z, soil, walls, cx, cy, m0, m1, m2, a0, a1, a2, r, deepest, s_hi - s_lo + cell,
-                     vx, vy, vz, wx, wy, wz, v_eps, wrenches[row], jac, D, rc, d_twist[row])
+                     vx, vy, vz, wx, wy, wz, v_eps, wrenches[row], jac, d_twist[row])
         per_link[row, L_NORMAL] += fnormal
         per_link[row, L_SINKAGE] = max(per_link[row, L_SINKAGE], deepest)
         per_link[row, L_NODES] += m
@@ -171,14 +167,15 @@ def body_soil(grid, base_z, soil, tile_of, plastic, yield_p, lift, used, piece_l
 
 @njit(cache=True)
 def rut_wall(grid, base_z, soil, walls, cx, cy, m0, m1, m2, a0, a1, a2, r, z, length, vx, vy, vz, wx, wy, wz,
-             v_eps, wrench, jac, D, rc, d_twist):
+             v_eps, wrench, jac, d_twist):
     """The rut walls' passive resistance on one piece (body_contact.py, "rut walls"): Rankine's passive force
     over the piece's contact length ``length`` and depth ``z`` (m, its deepest sinkage along N),
     P = L (½ γ z² K_p + 2 c z √K_p), against the piece centre's slip across its axis in the base's tangent
     plane, v_a: −P v_a / √(v_a² + v_ε²) along the across direction e = N × ĥ, applied z/3 above the piece's
     bottom (the resultant's depth of the weight's triangular part). (cx, cy) is the centre, m = centre −
     link origin (world). Adds to ``wrench`` (about the link origin) and, with ``jac``, the velocity slope
-    −P v_ε² / ρ³ e eᵀ to ``d_twist``; P's dependence on the depth is left out."""
+    −P v_ε² / ρ³ e eᵀ (the slip the centre's, the force at that point) to ``d_twist``; P's dependence on the
+    depth is left out."""
     gamma, kp = walls[0], walls[1]
     p_wall = length * (0.5 * gamma * z * z * kp + 2.0 * soil[SC] * z * math.sqrt(kp))
     if p_wall <= 0.0:
@@ -205,10 +202,13 @@ def rut_wall(grid, base_z, soil, walls, cx, cy, m0, m1, m2, a0, a1, a2, r, z, le
     wrench[4] += t1
     wrench[5] += t2
     if jac:
+        # k (X_qᵀ e)(X_mᵀ e)ᵀ: the slip is the centre's (lever m), the force acts at q, z/3 above the bottom;
+        # one lever for both (X_qᵀ D X_q) missed ∂f/∂ω by the r − z/3 between them, ~8 % of ∂f_y/∂ω_x
         k = -p_wall * v_eps * v_eps / (rho * rho * rho)
-        ev = (e0, e1, e2)
-        for i in range(3):
-            for j in range(3):
-                D[i, j] = k * ev[i] * ev[j]
-        rc[0], rc[1], rc[2] = q0, q1, q2
-        add_lever_quadratic(rc, D, d_twist)
+        tq0, tq1, tq2 = cross(q0, q1, q2, e0, e1, e2)
+        tm0, tm1, tm2 = cross(m0, m1, m2, e0, e1, e2)
+        a = (e0, e1, e2, tq0, tq1, tq2)
+        c = (e0, e1, e2, tm0, tm1, tm2)
+        for i in range(6):
+            for j in range(6):
+                d_twist[i, j] += k * a[i] * c[j]

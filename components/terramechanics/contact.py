@@ -9,7 +9,7 @@ base, vertical lines and A = Δ²; terrain/deformable_kernels.py):
     sinkage         s = the depth of that meeting point below the virgin surface, along N
     normal          σ = min(K_e (s − s_p), (k_c / b + k_φ) sⁿ)   (Bekker–Wong with SCM's elastic
                     unloading; terrain/deformable_kernels.py), b the patch's smaller side: the chord
-                    2√(2 r p − p²) of the deepest penetration p below the unloaded surface, or the
+                    2√(2 r p − p²) of the deepest sinkage p below the virgin surface, or the
                     contact's axial extent (+ Δ) if smaller; F_n = max(0, σ − R v_n) A along N,
                     A = Δ² / N_z the soil surface of the node's cell (R SCM's damping)
     shear strength  τ_max = c + σ tan φ                              (Mohr–Coulomb)

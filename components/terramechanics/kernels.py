@@ -24,7 +24,8 @@ With ``jac`` the same pass also fills the per-link 6×6 blocks a linearly implic
     s_h = −ρ A τ_max (1 − e^(−ℓ/K)) v_h / √(v_h² + v_ε²):   ∂s_h/∂v_h = −ρ A τ_max (1 − e^(−ℓ/K)) v_ε² / (…)^(3/2)
 
 and its height derivative (the sinkage s = N_z (h − z) falls as the node's contact point rises): ∂F/∂z =
-−σ'(s) N_z (A N + F_shear tan φ / τ_max), σ' = K_e on the elastic branch, n σ / s on Bekker's; both moved to
+−σ'(s) N_z (A N + F_shear tan φ / τ_max), σ' the slope of the branch a further load follows (add_height_slope:
+K_e below the node's yield memory, Bekker's n σ / s at or past it, as a commit leaves it); both moved to
 the screw link's origin as X_cᵀ D X_c (contact/jacobian_kernels.py: the point velocity is X_c of the screw
 link's twist, the link's origin being on the spin axis). Left out: the patch's b, ℓ and the contact set
 moving with the pose (lower order; a W-method keeps its order with any matrix).
@@ -39,8 +40,8 @@ from numba import njit
 
 from snakesim.components.contact.jacobian_kernels import add_lever_quadratic, add_lever_rank1
 from snakesim.components.terrain.deformable_kernels import (GCELL, GDRES, GNX, GNY, GSLOPE, GX0, GY0, SC, SDAMP, SKE,
-                                                           SKJ, SN, STANPHI, base_height, base_normal, node_normal,
-                                                           node_state, node_virgin, pressure)
+                                                           SKJ, SN, STANPHI, base_height, base_normal, bekker,
+                                                           node_normal, node_state, node_virgin, pressure)
 from snakesim.components.terrain.bulldozing_kernels import commit_logged
 
 # per-screw output columns
@@ -205,6 +206,23 @@ def cylinder_nodes(grid, base_z, tile_of, plastic, yield_p, lift, cx, cy, cz, a0
 
 
 @njit(cache=True, inline="always")
+def patch_chord(scratch, m, r, cell, s_lo, s_hi):
+    """The patch of a cylinder (radius r) on its ``m`` contact nodes in ``scratch``: (d, b), d the deepest
+    sinkage below the virgin surface (m), b Bekker's smaller side, the chord 2√(2 r d − d²) or the axial
+    extent + one cell if smaller (at least one cell). The sinkage below the virgin surface, not the penetration
+    below the rut: a cylinder lying in the groove it pressed fills it wall to wall though it presses only σ/K_e
+    (mm) into it; a patch of that elastic depth halved a screw's thrust in its rut
+    (tests/terramechanics/test_towed_module.py) and made b shrink at every commit. Continuous in the pose (the
+    deepest sinkage is), so the force is: no jumps as nodes enter the patch."""
+    d = 0.0
+    for q in range(m):
+        d = max(d, scratch[q, _SINK])
+    pc = min(d, r)
+    chord = 2.0 * math.sqrt(max(0.0, 2.0 * r * pc - pc * pc))
+    return d, max(cell, min(chord, s_hi - s_lo + cell))
+
+
+@njit(cache=True, inline="always")
 def soil_top(grid, base_z, x, y, reach):
     """An upper bound (m) of the virgin surface within ``reach`` m of (x, y): the base there plus its slope
     bound times the reach (the base itself on a plane)."""
@@ -221,12 +239,21 @@ def add_normal_damping(D, k, n0, n1, n2):
 
 
 @njit(cache=True, inline="always")
-def add_pressure_slope(soil, sigma, sink, s_p, tau_max, area, n0, n1, n2, f0, f1, f2, rc, gk, mk, block):
-    """A loaded node's height derivative (module docstring), moved to the link origin into ``block``:
-    −σ'(s) N_z (A N + f tan φ / τ_max) for the displacement along ẑ, −σ'(s) N_k (…) along each axis k
-    (∂s/∂p = −N); σ' on the branch pressure() took: elastic (K_e (s − s_p)) or Bekker's (n σ / s). f is the
-    node's shear force (N), ``gk``, ``mk`` scratch (3,)."""
-    dsig = soil[SKE] if sigma == soil[SKE] * (sink - s_p) else soil[SN] * sigma / sink
+def add_height_slope(soil, b, sink, s_p, s_y, tau_max, area, n0, n1, n2, f0, f1, f2, rc, gk, mk, block):
+    """A loaded node's height derivative, −σ' N_k (A N + f tan φ / τ_max) for a displacement along each axis k
+    (∂s/∂p = −N; f the node's shear force, N), moved to the link origin into ``block``; ``gk``, ``mk`` scratch
+    (3,). σ' is the slope of the branch a further load follows: K_e strictly below the node's yield memory σ_y
+    (unloaded, or back on an old rut), Bekker's n σ_B(s) / s at or past it.
+
+    Why not the tangent of pressure()'s branch: the tick's commit leaves every node it pressed at σ_y (to
+    rounding, hence the 1e-6), where the two branches meet and pressure() reads as elastic, while a further load
+    follows Bekker's (24× softer on regolith); a large step sinks along it. Declaring K_e there held every
+    sinking link as on rock under rosenbrock_w (regolith-sidewinding: 4 cm lateral drift in 5 s at 5 ms with a
+    fresh Jacobian each step, 10 cm at 10 ms; then 2.5 and 6 mm, as rk4's own at 5 ms). The other side of the
+    kink, a resting link's unloading at K_e, is then the explicit part's: stable for EELS 1.0's links, not for
+    Mini EELS's (it bounces at 10 ms)."""
+    el = soil[SKE] * (sink - s_p)
+    dsig = soil[SKE] if el < s_y * (1.0 - 1e-6) else soil[SN] * bekker(soil, b, sink) / sink
     k_sh = soil[STANPHI] / tau_max
     gk[0] = area * n0 + f0 * k_sh
     gk[1] = area * n1 + f1 * k_sh
@@ -297,23 +324,14 @@ def screw_soil(grid, base_z, soil, tile_of, plastic, yield_p, lift, used, rows, 
             continue                             # standing on its end: not modelled
         if cz - r * math.sqrt(1.0 - a2 * a2) - 0.5 * L * abs(a2) > soil_top(grid, base_z, cx, cy, 0.5 * L + r):
             continue                             # wholly above the virgin surface (ruts only go down)
-        m, s_lo, s_hi, pen = cylinder_nodes(grid, base_z, tile_of, plastic, yield_p, lift, cx, cy, cz, a0, a1, a2, r, L,
+        m, s_lo, s_hi, _ = cylinder_nodes(grid, base_z, tile_of, plastic, yield_p, lift, cx, cy, cz, a0, a1, a2, r, L,
                                             scratch)
         if m == 0:
             continue
-        # the patch: a cylinder sunk ``deepest`` below the virgin surface meets the soil over the chord
-        # 2√(2 r d − d²) across, the half angle θ0 = acos(1 − d / r) round the envelope from the bottom; Bekker's
-        # b is the smaller of the chord and the axial extent (a node stands for one cell). The sinkage below the
-        # virgin surface, not the penetration below the rut: a screw lying in the groove it pressed fills it
-        # wall to wall though it presses only σ/K_e (mm) into it, and a patch of that elastic depth halved the
-        # thrust in the rut (tests/terramechanics/test_towed_module.py). Both are continuous in the pose (the
-        # deepest sinkage is), so the force is: no jumps as nodes enter the patch
-        deepest = 0.0
-        for q in range(m):
-            deepest = max(deepest, scratch[q, _SINK])
+        # the patch (patch_chord): the deepest sinkage below the virgin surface sets Bekker's b and the arc
+        # round the envelope, half angle θ0 = acos(1 − d / r) from the bottom, that the thread crosses
+        deepest, b = patch_chord(scratch, m, r, cell, s_lo, s_hi)
         pc = min(deepest, r)
-        chord = 2.0 * math.sqrt(max(0.0, 2.0 * r * pc - pc * pc))
-        b = max(cell, min(chord, s_hi - s_lo + cell))
         u_hi = r * math.acos(1.0 - pc / r)
         u_lo = -u_hi
         fx = fy = fz = tx = ty = tz = 0.0
@@ -382,7 +400,7 @@ def screw_soil(grid, base_z, soil, tile_of, plastic, yield_p, lift, used, rows, 
                 rc[0], rc[1], rc[2] = X - ox, Y - oy, zb - oz
                 add_lever_quadratic(rc, D, d_twist[sr])
                 if sig > 0.0 and sink > s_p:
-                    add_pressure_slope(soil, sigma, sink, s_p, tau_max, area, N0, N1, ca, sc * ex0 + sh * eh0,
+                    add_height_slope(soil, b, sink, s_p, s_y, tau_max, area, N0, N1, ca, sc * ex0 + sh * eh0,
                                        sc * ex1 + sh * eh1, sc * ex2 + sh * eh2, rc, gk, mk, d_pose[sr])
                 on_link[sr] = True
             if commit:

@@ -46,7 +46,7 @@ def reference(n=2001):
 
 
 def kernel(across=1.0, v=(0.5, 0.0, 0.0), yaw=0.0, soil=SAND, cell=CELL, v_eps=1e-6, pose=None, blocks=False,
-           terrain=None, walls=(0.0, 0.0)):
+           terrain=None, walls=(0.0, 0.0), commit=False):
     t = terrain or DeformableTerrain(0.0, (-0.5, -0.5), (1.0, 1.0), cell, soil, max_tiles=64)
     st = t.state
     # the cylinder along the link's x: its frame's z axis (the URDF cylinder's) turned onto x
@@ -59,7 +59,7 @@ def kernel(across=1.0, v=(0.5, 0.0, 0.0), yaw=0.0, soil=SAND, cell=CELL, v_eps=1
     d_twist, d_pose, on = np.zeros((1, 6, 6)), np.zeros((1, 6, 6)), np.zeros(1, dtype=np.bool_)
     body_soil(t.grid, t.base_z, t.soil, st.tile_of, st.plastic, st.yield_p, st.lift, st.used, np.array([0]),
               np.array([[R, L, 1.0, across]]), piece_R, np.zeros((1, 3)), poses, vels, v_eps, np.asarray(walls, float),
-              False, *NO_LOG, scratch, w, per_link, totals, blocks, d_twist, d_pose, on)
+              commit, *NO_LOG, scratch, w, per_link, totals, blocks, d_twist, d_pose, on)
     return (w[0], per_link[0], d_twist[0], d_pose[0]) if blocks else (w[0], per_link[0])
 
 
@@ -85,17 +85,21 @@ def test_across_factor_scales_the_sideways_shear_only():
     assert w_side[2] == w_along[2]                         # the pressure does not depend on the slip
 
 
-@pytest.mark.parametrize("v_eps", [0.01, 1e-3])
-def test_jacobian_blocks_match_finite_differences(v_eps):
+WALLS = (1600.0 * 9.81, math.tan(math.radians(45.0 + 28.0 / 2.0)) ** 2)     # γ N/m³, K_p for SAND's φ = 28°
+
+
+@pytest.mark.parametrize("v_eps, walls", [(0.01, (0.0, 0.0)), (1e-3, (0.0, 0.0)), (0.01, WALLS)])
+def test_jacobian_blocks_match_finite_differences(v_eps, walls):
     """The declared ∂W/∂V against central differences of the kernel's wrench (a coarse grid: the node set
     does not change under the perturbation), with K tiny so that the shear is saturated and j's dependence
-    on the sliding direction (left out of the declaration) does not show; and ∂W_z/∂z."""
+    on the sliding direction (left out of the declaration) does not show, with and without the rut walls;
+    and ∂W/∂(displacement, rotation)."""
     from snakesim.components.terrain.deformable import SoilSpec
 
     soil = SoilSpec(**{**SAND.model_dump(), "janosi_k": 1e-9, "damping": 3e4})
     V = np.array([0.004, -0.003, 0.001, 0.02, -0.01, 0.05])          # near rest: the stiff regime
     pose = np.array([0.0003, -0.0004, R - PEN, 0.0, 0.0, 0.0, 1.0])
-    args = dict(across=2.5, soil=soil, cell=0.004, v_eps=v_eps, pose=pose)
+    args = dict(across=2.5, soil=soil, cell=0.004, v_eps=v_eps, pose=pose, walls=walls)
     w0, _, d_twist, d_pose = kernel(v=V, blocks=True, **args)
     h = 1e-8
     fd = np.empty((6, 6))
@@ -104,14 +108,60 @@ def test_jacobian_blocks_match_finite_differences(v_eps):
         dv[k] = h
         fd[:, k] = (kernel(v=V + dv, **args)[0] - kernel(v=V - dv, **args)[0]) / (2 * h)
     assert np.abs(d_twist - fd).max() <= 1e-5 * np.abs(fd).max()
-    # height: b follows the depth (k_c / b, left out: a few % for sand's small k_c), hence 5 %
+    # pose: δp of the origin, then δθ (world axes; exp(δθ) ⊗ q for q = identity). Declared: the height
+    # column and the tilt about y (the axis is x), each within 5 % of its scale (b following the depth:
+    # k_c / b, a few % for sand's small k_c). Left out: a horizontal shift and the roll about the axis (the
+    # node set, the lever arms turning: ∝ |ω| × the shear's slope, 0 at rest)
     dz = 1e-9
-    up, dn = pose.copy(), pose.copy()
-    up[2] += dz
-    dn[2] -= dz
-    fdz = (kernel(v=V, **{**args, "pose": up})[0] - kernel(v=V, **{**args, "pose": dn})[0]) / (2 * dz)
-    assert d_pose[2, 2] == pytest.approx(fdz[2], rel=5e-2)
+    fdp = np.empty((6, 2))
+    for c, k in enumerate((2, 4)):
+        up, dn = pose.copy(), pose.copy()
+        if k < 3:
+            up[k] += dz
+            dn[k] -= dz
+        else:
+            for sign, p in ((1.0, up), (-1.0, dn)):
+                p[3:] = 0.0
+                p[k], p[6] = math.sin(0.5 * sign * dz), math.cos(0.5 * sign * dz)
+        fdp[:, c] = (kernel(v=V, **{**args, "pose": up})[0] - kernel(v=V, **{**args, "pose": dn})[0]) / (2 * dz)
+    assert np.all(np.abs(d_pose[:, [2, 4]] - fdp).max(axis=0) <= 5e-2 * np.abs(fdp).max(axis=0))
+    assert d_pose[2, 2] == pytest.approx(fdp[2, 0], rel=5e-2)
     assert d_pose[2, 2] < 0.0 and w0[2] > 0.0
+
+
+@pytest.mark.parametrize("k_c", [0.0, SAND.k_c])
+def test_height_slope_after_a_commit_is_the_load_the_node_follows(k_c):
+    """A tick's commit leaves each pressed node at its yield memory σ_y: σ(s) has a kink there, Bekker's
+    (18× softer than K_e on SAND) for a further load. The declared ∂F_z/∂z is Bekker's slope, what a step
+    sinking further sees: the kernel's own secant over 1 mm, within 2 % (Bekker's curvature, n = 1.1: 1.4 %;
+    with k_c, b's growth with the depth, left out, takes 0.5 % off), not K_e (what made rosenbrock_w hold a
+    sinking link as on rock). (While b came from the depth below the fresh rut, it shrank at each commit and
+    σ_B rose by k_c / b: an elastic stretch of ~10 µm before Bekker's.) A node raised below its yield memory is
+    elastic: the declaration is the exact derivative there."""
+    from snakesim.components.terrain.deformable import SoilSpec
+
+    soil = SoilSpec(**{**SAND.model_dump(), "k_c": k_c})
+    t = DeformableTerrain(0.0, (-0.5, -0.5), (1.0, 1.0), 0.004, soil, max_tiles=64)
+    pose = np.array([0.0003, -0.0004, R - PEN, 0.0, 0.0, 0.0, 1.0])
+    args = dict(v=(0.01, 0.0, -0.005), soil=soil, cell=0.004, v_eps=0.01, terrain=t)
+    kernel(pose=pose, commit=True, **args)
+    w0, per_link, _, d_pose = kernel(pose=pose, blocks=True, **args)
+    dz = 1e-3
+    deeper = pose.copy()
+    deeper[2] -= dz
+    secant = (w0[2] - kernel(pose=deeper, **args)[0][2]) / dz
+    assert d_pose[2, 2] == pytest.approx(secant, rel=2e-2)
+    elastic = -soil.elastic_k * 0.004 ** 2 * per_link[L_NODES]        # K_e A over every loaded node
+    assert abs(elastic) > 10.0 * abs(d_pose[2, 2])
+    raised = pose.copy()
+    raised[2] += 1e-4                                                 # unloading: σ < σ_y at every node
+    _, _, _, d_raised = kernel(pose=raised, blocks=True, **args)
+    h = 1e-8
+    up, dn = raised.copy(), raised.copy()
+    up[2] += h
+    dn[2] -= h
+    fdz = (kernel(pose=up, **args)[0][2] - kernel(pose=dn, **args)[0][2]) / (2 * h)
+    assert d_raised[2, 2] == pytest.approx(fdz, rel=1e-6)
 
 
 def test_mini_eels_on_sand_carries_its_weight_and_leaves_a_rut(tmp_path):
