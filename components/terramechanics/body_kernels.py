@@ -72,8 +72,8 @@ def body_soil(grid, base_z, soil, tile_of, plastic, yield_p, lift, used, piece_l
             continue                             # standing on its end: not modelled
         if cz - r * math.sqrt(1.0 - a2 * a2) - 0.5 * L * abs(a2) > soil_top(grid, base_z, cx, cy, 0.5 * L + r):
             continue                             # wholly above the virgin surface
-        m, s_lo, s_hi, _ = cylinder_nodes(grid, base_z, tile_of, plastic, yield_p, lift, cx, cy, cz, a0, a1, a2, r, L,
-                                            scratch)
+        m, s_lo, s_hi = cylinder_nodes(grid, base_z, tile_of, plastic, yield_p, lift, cx, cy, cz, a0, a1, a2, r, L,
+                                       scratch)
         if m == 0:
             continue
         deepest, b = patch_chord(scratch, m, r, cell, s_lo, s_hi)      # Bekker's b, as the screws'

@@ -120,9 +120,8 @@ def cylinder_along_normal(cx, cy, cz, a0, a1, a2, r, sx, sy, sz, n0, n1, n2):
 def cylinder_nodes(grid, base_z, tile_of, plastic, yield_p, lift, cx, cy, cz, a0, a1, a2, r, L, scratch):
     """The nodes whose unloaded surface a finite cylinder (centre c, unit axis a, radius r, length L) presses,
     into ``scratch`` rows (the columns above: the contact point P where the node's line along the base normal
-    enters the cylinder, vertical on a plane base; u + towards a × e_down); (count, least and largest s_ax,
-    deepest penetration below the rutted surface along the normal). Shared by the screws and the body links
-    (body_kernels.py)."""
+    enters the cylinder, vertical on a plane base; u + towards a × e_down); (count, least and largest s_ax).
+    Shared by the screws and the body links (body_kernels.py); patch_chord reads the patch off the rows."""
     cell = grid[GCELL]
     x0, y0 = grid[GX0], grid[GY0]
     nx, ny = int(grid[GNX]), int(grid[GNY])
@@ -153,7 +152,7 @@ def cylinder_nodes(grid, base_z, tile_of, plastic, yield_p, lift, cx, cy, cz, a0
     half_ax = 0.5 * L * ah + r * abs(a2) + 1e-9 + lean
     half_across = r + 1e-9 + lean
     m = 0
-    s_lo, s_hi, pen = 1e300, -1e300, 0.0
+    s_lo, s_hi = 1e300, -1e300
     for i in range(i_lo, i_hi + 1):
         x = x0 + i * cell
         ddx = x - cx
@@ -178,15 +177,15 @@ def cylinder_nodes(grid, base_z, tile_of, plastic, yield_p, lift, cx, cy, cz, a0
                 top = hb - s_p
                 if zb >= top:
                     continue                 # above the (rutted) surface
-                sink, depth = hb - zb, top - zb
+                sink = hb - zb
             else:                            # the line along the base normal through the node's surface point
                 m0, m1, m2 = node_normal(grid, base_z, i, j)
                 t, sax = cylinder_along_normal(cx, cy, cz, a0, a1, a2, r, x, y, hb, m0, m1, m2)
                 if not (t == t) or abs(sax) > 0.5 * L:
                     continue
-                sink, depth = -t, -t - m2 * s_p       # the rut is s_p deep vertically, N_z s_p along N
-                if depth <= 0.0:
-                    continue
+                sink = -t
+                if sink - m2 * s_p <= 0.0:
+                    continue                 # above the rut (s_p deep vertically, N_z s_p along N)
                 px, py, zb = x + t * m0, y + t * m1, hb + t * m2
             if m >= scratch.shape[0]:
                 break
@@ -200,9 +199,8 @@ def cylinder_nodes(grid, base_z, tile_of, plastic, yield_p, lift, cx, cy, cz, a0
             scratch[m, _SAX], scratch[m, _U] = sax, u
             scratch[m, _N0], scratch[m, _N1], scratch[m, _N2] = m0, m1, m2
             s_lo, s_hi = min(s_lo, sax), max(s_hi, sax)
-            pen = max(pen, depth)
             m += 1
-    return m, s_lo, s_hi, pen
+    return m, s_lo, s_hi
 
 
 @njit(cache=True, inline="always")
@@ -324,8 +322,8 @@ def screw_soil(grid, base_z, soil, tile_of, plastic, yield_p, lift, used, rows, 
             continue                             # standing on its end: not modelled
         if cz - r * math.sqrt(1.0 - a2 * a2) - 0.5 * L * abs(a2) > soil_top(grid, base_z, cx, cy, 0.5 * L + r):
             continue                             # wholly above the virgin surface (ruts only go down)
-        m, s_lo, s_hi, _ = cylinder_nodes(grid, base_z, tile_of, plastic, yield_p, lift, cx, cy, cz, a0, a1, a2, r, L,
-                                            scratch)
+        m, s_lo, s_hi = cylinder_nodes(grid, base_z, tile_of, plastic, yield_p, lift, cx, cy, cz, a0, a1, a2, r, L,
+                                       scratch)
         if m == 0:
             continue
         # the patch (patch_chord): the deepest sinkage below the virgin surface sets Bekker's b and the arc
@@ -401,7 +399,7 @@ def screw_soil(grid, base_z, soil, tile_of, plastic, yield_p, lift, used, rows, 
                 add_lever_quadratic(rc, D, d_twist[sr])
                 if sig > 0.0 and sink > s_p:
                     add_height_slope(soil, b, sink, s_p, s_y, tau_max, area, N0, N1, ca, sc * ex0 + sh * eh0,
-                                       sc * ex1 + sh * eh1, sc * ex2 + sh * eh2, rc, gk, mk, d_pose[sr])
+                                     sc * ex1 + sh * eh1, sc * ex2 + sh * eh2, rc, gk, mk, d_pose[sr])
                 on_link[sr] = True
             if commit:
                 f = commit_logged(grid, soil, tile_of, plastic, yield_p, used, i, j, sink, b, ca, log, log_n, s)

@@ -140,9 +140,10 @@ def test_point_cloud2_read_by_hand_matches_rosbags_codec():
     M = ts.types
     pts = np.zeros(7, dtype=[("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("pad", "<f4"), ("ring", "<u2"),
                              ("status", "u1"), ("pad2", "u1")])
-    pts["x"], pts["y"], pts["z"] = np.arange(7), -np.arange(7), 0.5
-    fields = [M["sensor_msgs/msg/PointField"](name=n, offset=o, datatype=7, count=1)
-              for n, o in (("x", 0), ("y", 4), ("z", 8))]
+    pts["x"], pts["y"], pts["z"], pts["ring"] = np.arange(7), -np.arange(7), 0.5, 2000 + np.arange(7)
+    # float32 x, y, z and the ground-truth label (uint16, datatype 4) where the sim's cloud has it
+    fields = [M["sensor_msgs/msg/PointField"](name=n, offset=o, datatype=d, count=1)
+              for n, o, d in (("x", 0, 7), ("y", 4, 7), ("z", 8, 7), ("label", 16, 4))]
     msg = M["sensor_msgs/msg/PointCloud2"](
         header=M["std_msgs/msg/Header"](stamp=M["builtin_interfaces/msg/Time"](sec=12, nanosec=345),
                                         frame_id="lidar_x"),
@@ -151,8 +152,12 @@ def test_point_cloud2_read_by_hand_matches_rosbags_codec():
     cdr = bytes(ts.serialize_cdr(msg, "sensor_msgs/msg/PointCloud2"))
     got = messages.PointCloud2.deserialize(cdr)
     assert (got.header.stamp.sec, got.header.stamp.nanosec, got.header.frame_id) == (12, 345, "lidar_x")
-    assert [f.name for f in got.fields] == ["x", "y", "z"] and [f.offset for f in got.fields] == [0, 4, 8]
+    assert [f.name for f in got.fields] == ["x", "y", "z", "label"] and [f.offset for f in got.fields] == [0, 4, 8, 16]
     assert (got.width, got.height, got.point_step, got.is_dense) == (7, 1, 20, True)
     assert got.data == pts.tobytes()
     node = load("node")
-    assert np.allclose(node.cloud_points(got), np.column_stack([np.arange(7), -np.arange(7), np.full(7, 0.5)]))
+    xyz, label = node.cloud_points(got)
+    assert np.allclose(xyz, np.column_stack([np.arange(7), -np.arange(7), np.full(7, 0.5)]))
+    assert label.tolist() == list(range(2000, 2007))
+    got.fields = got.fields[:3]                        # a cloud without labels: the points alone
+    assert node.cloud_points(got)[1] is None
