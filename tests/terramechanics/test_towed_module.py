@@ -123,7 +123,11 @@ class Carriage(Component[CarriageParams]):
         w[r, 3:6] = -p.stiffness * theta - p.damping * v[3:6]
 
 
-def build_rig(tow: float, duration: float, z0: float, dt: float = DT):
+#: the rig's integrator (module docstring): rosenbrock_w ROS2, fixed steps, J at every step
+RIG_INTEGRATOR = {"name": "rosenbrock_w", "params": {"method": "ros2", "step_control": "fixed", "jacobian_every": 1}}
+
+
+def build_rig(tow: float, duration: float, z0: float, dt: float = DT, integrator: dict = RIG_INTEGRATOR):
     """The towed module (module docstring) as a Simulation, F = ``tow`` N, its origin starting at height ``z0``."""
     from snakesim.components.control.pid import JointPid
     from snakesim.components.multibody.component import Multibody
@@ -133,9 +137,7 @@ def build_rig(tow: float, duration: float, z0: float, dt: float = DT):
     from snakesim.components.tethers.wrench_sum import WrenchSum
     from snakesim.framework import Builder
 
-    b = Builder(dt=dt, duration=duration, record_rate=1.0 / dt,
-                integrator={"name": "rosenbrock_w", "params": {"method": "ros2", "step_control": "fixed",
-                                                               "jacobian_every": 1}})
+    b = Builder(dt=dt, duration=duration, record_rate=1.0 / dt, integrator=integrator)
     robot = b.add(Multibody("robot", urdf=str(URDF), base_position=(0.0, 0.0, z0), v0={"screw_front": OMEGA}))
     terrain = b.add(TerrainSource("terrain", {"name": str(SNOW)}))
     contact = b.add(TerramechanicsContact("contact"))
