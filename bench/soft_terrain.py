@@ -311,7 +311,7 @@ def hold(quick: bool) -> list[dict]:
 _I = "sim.integrator.params."
 #: part 8's integrator settings (overrides, sim overrides) against fixed 2 ms steps (1 cm from 1 ms over 45 s)
 STEPS = {
-    "the scene's (error control, 1 cm / 0.1 m/s / 10 %, J every 4th)": ([], {}),
+    "the scene's: error control, 1 cm / 0.1 m/s / 10 %, J 4th": ([], {}),
     "fixed 20 ms, J every 8th": ([f"{_I}step_control=fixed", f"{_I}jacobian_every=8"], {}),
     "fixed 20 ms, J every step": ([f"{_I}step_control=fixed", f"{_I}jacobian_every=1"], {}),
     "fixed 10 ms": ([f"{_I}step_control=fixed", f"{_I}jacobian_every=1"], {"dt": 0.01}),
@@ -399,8 +399,9 @@ def table(out: dict) -> str:
     lines += ["8. the step on snow (snow-screw-traverse's tail against fixed 2 ms; forward speed at 1 rad/s)",
               "   step                                                        RTF   off 5 s  off 9 s   max cm  "
               "m/s at 1 rad/s  outcome"]
-    lines += [f"   {r['step']:58s} {r['real_time_factor']:5.1f}  {100 * r['off_5s_m']:6.1f}  {100 * r['off_9s_m']:7.1f}  "
-              f"{100 * r['off_max_m']:7.1f}  {r['speed_1rad_s']:14.4f}  {r['outcome']}" for r in out["step"]]
+    lines += [f"   {r['step']:58s} {r['real_time_factor']:5.1f}  {100 * r['off_5s_m']:6.1f}  "
+              f"{100 * r['off_9s_m']:7.1f}  {100 * r['off_max_m']:7.1f}  {r['speed_1rad_s']:14.4f}  {r['outcome']}"
+              for r in out["step"]]
     return "\n".join(lines)
 
 

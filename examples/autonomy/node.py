@@ -19,8 +19,8 @@ empty JointState (the sim rejects it with a warning, and it releases the period 
 It stops the screws once the head is within ``goal_radius`` of the goal, answers a few more periods
 and leaves; with ``--log FILE`` it writes what it did (JSON: the stamps it answered, each /clock it saw
 against its last answer, the head's track, the path, and from the clouds' ground-truth ``label`` field the
-obstacles each mapped scan showed: never used to map, only to score the map), with ``--picture FILE`` a PNG of the map, path
-and track. Units: m, rad, s; frame ``world``.
+obstacles each mapped scan showed: never used to map, only to score the map), with ``--picture FILE`` a PNG of
+the map, path and track. Units: m, rad, s; frame ``world``.
 """
 
 import argparse

@@ -20,7 +20,8 @@ DURATION = 6.0
 
 
 def _run(overrides=(), sim=None):
-    s = load_session("regolith-sidewinding", overrides=list(overrides), sim_overrides={"duration": DURATION, **(sim or {})})
+    s = load_session("regolith-sidewinding", overrides=list(overrides),
+                     sim_overrides={"duration": DURATION, **(sim or {})})
     r = s.run()
     model = s.plan.components["robot"].dyn.model
     return r, sum(i.mass for i in model.inertias)
