@@ -15,9 +15,10 @@ counter-rotating pair's yaw couple, which spun a free module, and the tow's pitc
 (travel) and z (sinkage) stay free, and the constant −F x̂ is added. Its slopes are declared (a
 LinkWrenchJacobian, as the soil contact's), so the springs are implicit.
 
-Step: 2 ms, not the snow scene's 20 ms. At 20 ms the screw's spin read at the ticks is 7 % under the PID's
-3 rad/s (the step-mean holds it: the PID integral sees the stages) and near stall the travel is 25 % slow
-(F = 20 N: 0.0188 against 0.0252 m/s at 1 ms); at 2 ms the slip is within 0.003 of 0.5 ms's.
+Step: 2 ms, not the snow scene's 20 ms. At 20 ms (ROS2, not stiffly accurate) the screw's spin read at the
+ticks is 7 % under the PID's 3 rad/s (the stages average it out: the PID integral does not wind up) and the
+travel is 0.5 %, 2.5 % and 12 % slow at F = 0, 20, 40 N (docs/terramechanics.md); at 2 ms the slip is within
+0.003 of 0.5 ms's.
 
 Measured over the window (the last 1.5 s of 3 s; the speed's time constant m / (dT/dv) ~ 10 ms, the
 sinkage's a few steps): the slip s = 1 − v̄_x / (ω̄ r tan λ), v̄_x a straight-line fit of the carriage's x(t),
