@@ -410,7 +410,7 @@ def plot(out: dict, path: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(1, 3, figsize=(14, 4))
+    fig, ax = plt.subplots(1, 4, figsize=(19, 4))
     d = out["drawbar"]
     ax[0].plot(d["slip"], np.array(d["thrust_N"]) / d["module_weight_N"], marker="o")
     ok = [(s, F) for s, F in zip(d["steady_slip"], d["towing_force_N"]) if s is not None]
@@ -437,6 +437,18 @@ def plot(out: dict, path: Path) -> None:
     ax[2].set_xlabel("snow grid cell (m)")
     ax[2].set_ylabel("wall µs per 20 ms step")
     ax[2].set_title("cost per step")
+    # part 8: what each step buys, accuracy (the tail at the forward phase's end and at most, against 2 ms)
+    # against speed; the scene's setting marked
+    for r in out.get("step", [])[1:]:
+        scene = r["step"].startswith("the scene's")
+        ax[3].plot(r["real_time_factor"], 100 * r["off_9s_m"], "o", color="C3" if scene else "C0")
+        ax[3].plot(r["real_time_factor"], 100 * r["off_max_m"], "^", color="C3" if scene else "C0", alpha=0.5)
+        ax[3].annotate(r["step"].split(":")[0].replace(", J every", ", J/"), (r["real_time_factor"], 100 * r["off_9s_m"]),
+                       fontsize=7, xytext=(3, 3), textcoords="offset points")
+    ax[3].set_yscale("symlog", linthresh=0.1)
+    ax[3].set_xlabel("real-time factor")
+    ax[3].set_ylabel("tail off fixed 2 ms (cm): ● at 9 s, ▲ at most in 45 s")
+    ax[3].set_title("the step on snow (the scene's in red)")
     for a in ax:
         a.grid(alpha=0.3)
     fig.tight_layout()
