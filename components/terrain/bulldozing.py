@@ -32,6 +32,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 from .bulldozing_kernels import bulldoze
+from .spec_models import open_quadrant_deg
 
 
 class BulldozingSpec(BaseModel):
@@ -47,9 +48,7 @@ class BulldozingSpec(BaseModel):
     @field_validator("erosion_angle")
     @classmethod
     def _angle(cls, v):
-        if not 0.0 < v < 90.0:
-            raise ValueError(f"erosion_angle = {v} deg: must be in (0, 90) degrees (the soil's angle of repose)")
-        return v
+        return open_quadrant_deg(v, "erosion_angle", " (the soil's angle of repose)")
 
 
 class SoilFlowLog:

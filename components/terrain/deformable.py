@@ -49,7 +49,7 @@ from typing import Literal
 from .base import Bounds, Terrain, TerrainMesh, TerrainState
 from .bulldozing import BulldozingSpec
 from .deformable_kernels import TILE, empty_used, query_surface
-from .spec_models import KindSpec
+from .spec_models import KindSpec, open_quadrant_deg
 
 
 class SoilSpec(BaseModel):
@@ -79,9 +79,7 @@ class SoilSpec(BaseModel):
     @field_validator("friction_angle")
     @classmethod
     def _phi(cls, v):
-        if not 0.0 < v < 90.0:
-            raise ValueError(f"friction_angle = {v} deg: must be in (0, 90) degrees")
-        return v
+        return open_quadrant_deg(v, "friction_angle", " (the soil's internal friction, Mohr–Coulomb)")
 
 
 class DeformableSpec(KindSpec):

@@ -39,6 +39,14 @@ from . import analytic
 Vec3 = tuple[float, float, float]
 
 
+def open_quadrant_deg(v: float, key: str, meaning: str) -> float:
+    """An angle validator: ``v`` (deg) strictly between 0 and 90, else a ValueError naming ``key`` and what the
+    angle is (the soil's friction angle, the berms' repose)."""
+    if not 0.0 < v < 90.0:
+        raise ValueError(f"{key} = {v} deg: must be in (0, 90) degrees{meaning}")
+    return v
+
+
 class _Model(BaseModel):
     model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)   # every number finite
 

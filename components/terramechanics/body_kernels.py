@@ -26,17 +26,15 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 from numba import njit
 
 from snakesim.components.contact.jacobian_kernels import add_lever_quadratic
 
 from snakesim.components.terrain.bulldozing_kernels import commit_logged
-from snakesim.components.terrain.deformable_kernels import (GCELL, SC, SDAMP, SKJ, STANPHI, base_normal, node_state,
-                                                           pressure)
+from snakesim.components.terrain.deformable_kernels import SC, base_normal, node_state, pressure
 
 from .kernels import (_I, _J, _N0, _N1, _N2, _PX, _PY, _SINK, _ZB, add_height_slope, add_normal_damping, add_wrench,
-                      clear_outputs, cross, cylinder_nodes, patch_chord, quat_rotate, soil_top)
+                      cross, cylinder_nodes, patch_chord, quat_rotate, soil_kernel_start, soil_top)
 
 # per-link output columns
 L_NORMAL, L_SINKAGE, L_NODES = range(3)
@@ -51,12 +49,9 @@ def body_soil(grid, base_z, soil, tile_of, plastic, yield_p, lift, used, piece_l
     bulldozing (terrain/bulldozing_kernels.py; empty: none). Returns the nodes a commit made flow (0
     without ``commit``), −1 when the terrain's tile pool is full. With ``jac``: the links' blocks into
     ``d_twist``, ``d_pose`` (nl, 6, 6), those with one marked in ``on_link`` (cleared first)."""
-    cell = grid[GCELL]
-    cell_area = cell * cell
-    c_coh, tan_phi, kj, damp = soil[SC], soil[STANPHI], soil[SKJ], soil[SDAMP]
+    cell, cell_area, c_coh, tan_phi, kj, damp, D, rc, gk, mk = soil_kernel_start(grid, soil, jac, on_link, d_twist,
+                                                                                d_pose, totals)
     flows = 0
-    D, rc, gk, mk = np.zeros((3, 3)), np.zeros(3), np.zeros(3), np.zeros(3)      # a node's Jacobian terms
-    clear_outputs(jac, on_link, d_twist, d_pose, totals)
     for k in range(per_link.shape[0]):
         for c in range(per_link.shape[1]):
             per_link[k, c] = 0.0

@@ -284,6 +284,17 @@ def clear_outputs(jac, on_link, d_twist, d_pose, totals):
     totals[:] = 0.0
 
 
+@njit(cache=True, inline="always")
+def soil_kernel_start(grid, soil, jac, on_link, d_twist, d_pose, totals):
+    """What both soil kernels (this file's and body_kernels.py's) start with: the cell (m) and its area (m²), the
+    soil's c (Pa), tan φ, K (m) and damping (Pa·s/m), a node's Jacobian scratch (D 3×3, rc, gk, mk), and the
+    outputs they fill from scratch cleared (clear_outputs)."""
+    cell = grid[GCELL]
+    clear_outputs(jac, on_link, d_twist, d_pose, totals)
+    return (cell, cell * cell, soil[SC], soil[STANPHI], soil[SKJ], soil[SDAMP],
+            np.zeros((3, 3)), np.zeros(3), np.zeros(3), np.zeros(3))
+
+
 @njit(cache=True)
 def screw_soil(grid, base_z, soil, tile_of, plastic, yield_p, lift, used, rows, geo, mount_R, mount_p, poses, vels,
                joint_v, helix_ratio, v_eps, commit, log, log_n, scratch, wrenches, per_screw, totals, jac, d_twist,
@@ -293,12 +304,9 @@ def screw_soil(grid, base_z, soil, tile_of, plastic, yield_p, lift, used, rows, 
     nodes a commit made flow (0 without ``commit``), −1 when it found the terrain's tile pool full. With
     ``jac``: the screw links' blocks into ``d_twist``, ``d_pose`` (nl, 6, 6), the links with one marked in
     ``on_link`` (the blocks of links marked before are cleared first)."""
-    cell = grid[GCELL]
-    cell_area = cell * cell
-    c_coh, tan_phi, kj, damp = soil[SC], soil[STANPHI], soil[SKJ], soil[SDAMP]
+    cell, cell_area, c_coh, tan_phi, kj, damp, D, rc, gk, mk = soil_kernel_start(grid, soil, jac, on_link, d_twist,
+                                                                                d_pose, totals)
     flows = 0
-    D, rc, gk, mk = np.zeros((3, 3)), np.zeros(3), np.zeros(3), np.zeros(3)      # a node's Jacobian terms
-    clear_outputs(jac, on_link, d_twist, d_pose, totals)
     for s in range(rows.shape[0]):
         for k in range(per_screw.shape[1]):
             per_screw[s, k] = 0.0

@@ -141,15 +141,21 @@ def test_bad_soil_names_file_and_key(tmp_path, old, new, key, named):
     assert "inline.yaml" in msg and ("soil" if key == "k_c" else f"soil.{key}") in msg
 
 
-def test_a_missing_soil_include_names_the_key_and_the_path(tmp_path):
+@pytest.mark.parametrize("include,words", [
+    ("soils/no-such-soil.yaml", ("snow.yaml", "soil.include", "no-such-soil.yaml")),     # missing
+    ("soils/list.yaml", ("list.yaml", "soil", "mapping")),                               # a list, not a mapping
+])
+def test_a_bad_soil_include_names_the_file_and_key(tmp_path, include, words):
     from snakesim.framework.errors import SnakesimError
 
+    (tmp_path / "soils").mkdir()
+    (tmp_path / "soils" / "list.yaml").write_text("- 4.37e3\n- 196.72e3\n")
     field = (TERRAINS / "snow-field.yaml").read_text()
-    (tmp_path / "snow.yaml").write_text(field.replace("soils/snow-us.yaml", "soils/no-such-soil.yaml"))
+    (tmp_path / "snow.yaml").write_text(field.replace("soils/snow-us.yaml", include))
     with pytest.raises(SnakesimError) as e:
         load_terrain(str(tmp_path / "snow.yaml"))
     msg = str(e.value)
-    assert "snow.yaml" in msg and "soil.include" in msg and "no-such-soil.yaml" in msg
+    assert all(w in msg for w in words), msg
 
 
 @pytest.mark.parametrize("scene,contact,rigid", [("snow-screw-traverse", "terramechanics_contact", "screw_sdf_contact"),
@@ -163,16 +169,3 @@ def test_a_soil_contact_on_a_rigid_terrain_names_the_kind_and_the_alternative(sc
         s.run()
     msg = str(e.value)
     assert "'plane'" in msg and contact in msg and "deformable" in msg and rigid in msg
-
-
-def test_a_soil_include_that_is_not_a_mapping_names_the_file_and_key(tmp_path):
-    from snakesim.framework.errors import SnakesimError
-
-    (tmp_path / "soils").mkdir()
-    (tmp_path / "soils" / "list.yaml").write_text("- 4.37e3\n- 196.72e3\n")
-    field = (TERRAINS / "snow-field.yaml").read_text()
-    (tmp_path / "snow.yaml").write_text(field.replace("soils/snow-us.yaml", "soils/list.yaml"))
-    with pytest.raises(SnakesimError) as e:
-        load_terrain(str(tmp_path / "snow.yaml"))
-    msg = str(e.value)
-    assert "list.yaml" in msg and "soil" in msg and "mapping" in msg
