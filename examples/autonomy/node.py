@@ -8,8 +8,9 @@ any ROS 2 node. Its loop, once per control period (lockstep: the sim holds until
     /joint_states (t)      the state at t: joint names, and the cue to answer
     /tf, /tf_static        every link's pose in world; the lidar frame on its link
     /odom/ground_truth     the head's pose (``--odometry head``)
-    /<lidar>/points        PointCloud2 in the lidar frame -> world -> the cost map (:mod:`cost_map`),
-                           returns within ``self_radius`` of a link dropped (the robot's own body)
+    /<lidar>/points        PointCloud2 in the lidar frame -> world, each return from the pose its beam
+                           fired at (:mod:`deskew`) -> the cost map (:mod:`cost_map`), returns within
+                           ``self_radius`` of a link dropped (the robot's own body)
     every ``replan`` s     Dijkstra from the head to the goal (:mod:`planner`)
     /joint_command         JointState stamped t: screws by velocity, bends by position (:mod:`follower`)
 
@@ -40,6 +41,7 @@ if __package__ in (None, ""):                 # run as a script: its folder hold
     sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 from cost_map import CostMap, CostMapParams  # noqa: E402
+from deskew import deskew  # noqa: E402
 from follower import Follower, FollowerParams  # noqa: E402
 from messages import (QOS_CLOCK, QOS_DEFAULT, QOS_SENSOR, QOS_TF, QOS_TF_STATIC, Clock, Header,  # noqa: E402
                       JointState, Odometry, PointCloud2, TFMessage, Time)
@@ -62,19 +64,19 @@ def transform(tf) -> tuple[np.ndarray, np.ndarray]:
     return rotation((r.x, r.y, r.z, r.w)), np.array([t.x, t.y, t.z])
 
 
-def cloud_points(msg: PointCloud2) -> tuple[np.ndarray, np.ndarray | None]:
-    """x, y, z [n, 3] of a PointCloud2's returns (NaN points, the beams without a return, dropped), and their
-    ``label`` [n] (uint16, the simulator's ground truth of what each beam hit) where the cloud has one."""
+def cloud_points(msg: PointCloud2) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """x, y, z [n, 3] of a PointCloud2's returns (NaN points, the beams without a return, dropped), and those
+    of its optional fields it has, per return: ``t`` (float32 s, the firing time relative to the stamp, for
+    :mod:`deskew`) and ``label`` (uint16, the simulator's ground truth of what each beam hit)."""
     offs = {f.name: f.offset for f in msg.fields}
-    names, formats = ["x", "y", "z"], ["<f4"] * 3
-    if "label" in offs:
-        names, formats = names + ["label"], formats + ["<u2"]
+    extra = [(name, fmt) for name, fmt in (("t", "<f4"), ("label", "<u2")) if name in offs]
+    names, formats = ["x", "y", "z"] + [n for n, _ in extra], ["<f4"] * 3 + [f for _, f in extra]
     dt = np.dtype({"names": names, "formats": formats, "offsets": [offs[n] for n in names],
                    "itemsize": msg.point_step})
     cloud = np.frombuffer(msg.data, dtype=dt, count=msg.width * msg.height)
     xyz = np.stack([cloud["x"], cloud["y"], cloud["z"]], axis=1).astype(float)
     ok = np.isfinite(xyz).all(axis=1)
-    return xyz[ok], (cloud["label"][ok] if "label" in offs else None)
+    return xyz[ok], {name: cloud[name][ok] for name, _ in extra}
 
 
 def stamp_key(stamp) -> int:
@@ -134,18 +136,16 @@ class AutonomyNode:
                 p = msg.pose.pose.position
                 self.head = np.array([p.x, p.y, p.z])
 
-    def frame_in_world(self, frame: str, links=None):
-        """(R, p) of a frame: a moving link from /tf (``links``: those of one stamp; default the latest), or a
-        fixed frame on one (/tf_static)."""
-        links = self.links if links is None else links
-        if frame in links:
-            return links[frame]
-        if frame in self.static:
-            parent, r, p = self.static[frame]
-            up = self.frame_in_world(parent, links)
-            if up is not None:
-                return up[0] @ r, up[0] @ p + up[1]
-        return None
+    def mount(self, frame: str, links: dict):
+        """(link, R, p): the moving link (one of ``links``, from /tf) a frame is fixed on, and the frame's pose
+        on it through /tf_static; None while the chain is not known."""
+        R, p = np.eye(3), np.zeros(3)
+        while frame not in links:
+            if frame not in self.static:
+                return None
+            frame, r, q = self.static[frame]
+            R, p = r @ R, r @ p + q
+        return frame, R, p
 
     def take_clouds(self) -> None:
         clouds = self.pending + [m for m in self.points.take(N=10) if isinstance(m, PointCloud2)]
@@ -158,19 +158,35 @@ class AutonomyNode:
                 if newest is None or key > newest:
                     self.pending.append(msg)      # its /tf is still on the way
                 continue                          # older than the /tf kept: dropped
-            pose = self.frame_in_world(msg.header.frame_id, links)
-            if pose is None or self.head is None:
+            mount = self.mount(msg.header.frame_id, links)
+            if mount is None or self.head is None:
                 continue
-            local, label = cloud_points(msg)
+            local, fields = cloud_points(msg)
             keep = np.hypot(local[:, 0], local[:, 1]) < self.args.max_range
-            world = local[keep] @ pose[0].T + pose[1]
+            world = self.place(local[keep], fields["t"][keep] if "t" in fields else None, key, mount, links)
             body = cKDTree(np.array([p for _, p in links.values()]))
             near, _ = body.query(world, distance_upper_bound=self.args.self_radius)
             mapped = np.isinf(near)                      # inf: no link within self_radius
             self.map.add(world[mapped])
             self.scans += 1
-            if label is not None:
-                self.count_evidence(world[mapped], label[keep][mapped], pose[1])
+            if "label" in fields:
+                R, p = links[mount[0]]
+                self.count_evidence(world[mapped], fields["label"][keep][mapped], R @ mount[2] + p)
+
+    def place(self, local: np.ndarray, tau, key: int, mount: tuple, links: dict) -> np.ndarray:
+        """World positions of a cloud's points (lidar frame), stamped ``key`` (µs): deskewed (:mod:`deskew`)
+        between the mount link's /tf at the sweep's start and at the stamp where the cloud has firing times
+        and the earlier /tf is kept; else all placed with the pose at the stamp."""
+        link, R_ls, p_ls = mount
+        R, p = links[link]
+        if tau is not None and len(tau):
+            start = key + int(np.floor(float(tau.min()) * 1e6)) + 1   # µs; float32 times: a hair of slack
+            earlier = [k for k, at in self.links_at.items() if k <= start and link in at]
+            if earlier:
+                k0 = max(earlier)
+                return deskew(local, tau, key * 1e-6, (k0 * 1e-6, *self.links_at[k0][link]), (key * 1e-6, R, p),
+                              (R_ls, p_ls))
+        return local @ (R @ R_ls).T + (R @ p_ls + p)
 
     def count_evidence(self, world: np.ndarray, label: np.ndarray, origin: np.ndarray) -> None:
         """Score, never map: from the cloud's ground-truth labels, note each obstacle (label 2000 + i) that this

@@ -121,7 +121,8 @@ def test_the_node_reaches_the_goal_past_the_course_in_lockstep_without_touching_
     clock = np.array([c for c in result["clock_vs_answer"] if np.isfinite(c[1])])
     assert len(clock) > 100 and (clock[:, 0] - clock[:, 1]).max() <= PERIOD + 1e-6
 
-    # the map is the lidar's: most of its obstacle cells lie on the course's obstacles (within 3 cells), and it
+    # the map is the lidar's: its obstacle cells lie on the course's obstacles (within 3 cells: all of them in
+    # four runs; 84-92 % before the node deskewed the clouds, a turning head smearing blocks 15-35 cm), and it
     # holds every obstacle the lidar showed it up close. Which those were comes from the clouds' ground-truth
     # labels (the node logs, per mapped scan, each obstacle with >= 10 returns clear of the ice and their
     # nearest range): a distance to the track alone cannot say, as the robot's path varies with the timing of
@@ -129,7 +130,7 @@ def test_the_node_reaches_the_goal_past_the_course_in_lockstep_without_touching_
     # >= 5 scans within 3 m (the map needs a step within 35 cm and 2 scans; ring spacing grows with range)
     cells = np.array(result["obstacles"])
     on_ground = np.column_stack([cells, np.full(len(cells), 0.02)])
-    assert (obstacle_distance(on_ground) < 0.15).mean() > 0.85
+    assert (obstacle_distance(on_ground) < 0.15).mean() > 0.95
     course = yaml.safe_load(TERRAIN.read_text())
     mapped = [box_distance(on_ground, o["center"], o["size"], o["yaw"]).min() for o in course["boxes"]]
     mapped += [(np.linalg.norm(on_ground - o["center"], axis=-1) - o["radius"]).min() for o in course["spheres"]]

@@ -1,5 +1,6 @@
 """examples/autonomy's parts alone, without a sim: the cost map from points, the planner on it, the
-follower's steering sense, and the hand-read PointCloud2 against rosbags' CDR codec."""
+follower's steering sense, the scan's deskew against a known motion, and the hand-read PointCloud2
+against rosbags' CDR codec."""
 
 import importlib.util
 import sys
@@ -24,7 +25,7 @@ def load(name: str):
         sys.path.remove(str(HERE))
 
 
-cost_map, planner, follower = load("cost_map"), load("planner"), load("follower")
+cost_map, planner, follower, deskew = load("cost_map"), load("planner"), load("follower"), load("deskew")
 
 
 def flat_ground(x0=0.0, x1=4.0, y0=-1.0, y1=1.0, step=0.02) -> np.ndarray:
@@ -141,9 +142,10 @@ def test_point_cloud2_read_by_hand_matches_rosbags_codec():
     pts = np.zeros(7, dtype=[("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("pad", "<f4"), ("ring", "<u2"),
                              ("status", "u1"), ("pad2", "u1")])
     pts["x"], pts["y"], pts["z"], pts["ring"] = np.arange(7), -np.arange(7), 0.5, 2000 + np.arange(7)
-    # float32 x, y, z and the ground-truth label (uint16, datatype 4) where the sim's cloud has it
+    pts["pad"] = -0.01 * np.arange(7)
+    # float32 x, y, z, the firing time t and the ground-truth label (uint16, datatype 4) where the sim's cloud has it
     fields = [M["sensor_msgs/msg/PointField"](name=n, offset=o, datatype=d, count=1)
-              for n, o, d in (("x", 0, 7), ("y", 4, 7), ("z", 8, 7), ("label", 16, 4))]
+              for n, o, d in (("x", 0, 7), ("y", 4, 7), ("z", 8, 7), ("t", 12, 7), ("label", 16, 4))]
     msg = M["sensor_msgs/msg/PointCloud2"](
         header=M["std_msgs/msg/Header"](stamp=M["builtin_interfaces/msg/Time"](sec=12, nanosec=345),
                                         frame_id="lidar_x"),
@@ -152,12 +154,40 @@ def test_point_cloud2_read_by_hand_matches_rosbags_codec():
     cdr = bytes(ts.serialize_cdr(msg, "sensor_msgs/msg/PointCloud2"))
     got = messages.PointCloud2.deserialize(cdr)
     assert (got.header.stamp.sec, got.header.stamp.nanosec, got.header.frame_id) == (12, 345, "lidar_x")
-    assert [f.name for f in got.fields] == ["x", "y", "z", "label"] and [f.offset for f in got.fields] == [0, 4, 8, 16]
+    assert [f.name for f in got.fields] == ["x", "y", "z", "t", "label"]
+    assert [f.offset for f in got.fields] == [0, 4, 8, 12, 16]
     assert (got.width, got.height, got.point_step, got.is_dense) == (7, 1, 20, True)
     assert got.data == pts.tobytes()
     node = load("node")
-    xyz, label = node.cloud_points(got)
+    xyz, fields = node.cloud_points(got)
     assert np.allclose(xyz, np.column_stack([np.arange(7), -np.arange(7), np.full(7, 0.5)]))
-    assert label.tolist() == list(range(2000, 2007))
-    got.fields = got.fields[:3]                        # a cloud without labels: the points alone
-    assert node.cloud_points(got)[1] is None
+    assert fields["label"].tolist() == list(range(2000, 2007))
+    assert fields["t"].tolist() == pytest.approx(-0.01 * np.arange(7))
+    got.fields = got.fields[:3]                        # a cloud with neither: the points alone
+    assert node.cloud_points(got)[1] == {}
+
+
+def test_deskew_places_each_return_from_the_pose_its_beam_fired_at():
+    # a lidar on a link turning at a steady 1.2 rad/s about a tilted axis while moving at 0.4 m/s: its pose is
+    # the geodesic and the straight line between the sweep's ends, so deskewing recovers the world exactly
+    from scipy.spatial.transform import Rotation
+    rng = np.random.default_rng(3)
+    T, stamp, w, v = 0.1, 7.3, 1.2 * np.array([0.2, -0.3, 0.93]) / np.linalg.norm([0.2, -0.3, 0.93]), [0.4, 0.1, 0.0]
+    R_ls, p_ls = Rotation.from_euler("x", -np.pi / 2).as_matrix(), np.array([0.175, 0.1175, 0.0])
+    R1, p1 = Rotation.from_euler("z", 0.4).as_matrix(), np.array([2.0, -1.0, 0.09])
+
+    def link_at(tau):          # the link's pose at stamp + tau (tau <= 0)
+        return Rotation.from_rotvec(np.outer(tau, w)).as_matrix() @ R1, p1 + np.outer(tau, v)
+
+    world = rng.uniform([-3, -3, 0], [8, 3, 0.5], (500, 3))
+    tau = -T * rng.integers(0, 1025, 500) / 1024               # a grid's columns' firing times
+    R_l, p_l = link_at(tau)
+    on_link = np.einsum("nji,nj->ni", R_l, world - p_l)       # R_lᵀ (x − p_l)
+    local = (on_link - p_ls) @ R_ls                            # R_lsᵀ (x_l − p_ls), row-wise
+    R0, p0 = link_at(np.array([-T]))
+    got = deskew.deskew(local, tau.astype(np.float32), stamp, (stamp - T, R0[0], p0[0]), (stamp, R1, p1), (R_ls, p_ls))
+    # float32 firing times: |w|·r·δτ with δτ ~ 4e-9 s
+    np.testing.assert_allclose(got, world, atol=1e-6)
+    # placed with the pose at the stamp instead: off by up to |w|·r·T, tens of cm at 8 m
+    at_stamp = (local @ R_ls.T + p_ls) @ R1.T + p1
+    assert np.abs(at_stamp - world).max() > 0.3
