@@ -20,6 +20,7 @@ finished run with fewer rows.
 from __future__ import annotations
 
 import datetime
+import errno
 import json
 import os
 import socket
@@ -70,6 +71,29 @@ def _alive(holder: dict) -> bool:
     return True
 
 
+#: what os.link raises where the file system has no hard links
+NO_HARD_LINKS = (errno.EPERM, errno.ENOTSUP, errno.EOPNOTSUPP, errno.ENOSYS, errno.EMLINK)
+
+
+def _create_with(lock: Path, text: str) -> None:
+    """Create ``lock`` holding ``text`` in one step (FileExistsError if it exists): written to a private file
+    first, then hard-linked into place, so no reader ever finds the claim empty and cannot name its holder.
+    Where the file system has no hard links, an exclusive create and then the write."""
+    private = lock.with_name(f"{lock.name}.{os.getpid()}")
+    try:
+        private.write_text(text)
+        os.link(private, lock)
+        return
+    except OSError as e:
+        if e.errno not in NO_HARD_LINKS:         # FileExistsError (claimed), a full disk: the caller's
+            raise
+    finally:
+        private.unlink(missing_ok=True)
+    fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+    with os.fdopen(fd, "w") as fh:
+        fh.write(text)
+
+
 def _claim(path: Path, option: str) -> None:
     """Create the folder's lock atomically for this process (already ours: nothing to do); refuse it while
     another live process holds it; take over a lock whose process is gone."""
@@ -78,21 +102,18 @@ def _claim(path: Path, option: str) -> None:
           "started": datetime.datetime.now().astimezone().isoformat(timespec="seconds")}
     for _ in range(2):
         try:
-            fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+            _create_with(lock, json.dumps(me))
+            return
         except FileExistsError:
             holder = _holder(lock)
             if holder.get("pid") == me["pid"] and holder.get("host") == me["host"]:
                 return
-            if _alive(holder) or not holder:     # unreadable: it is being written this very moment
+            if _alive(holder) or not holder:     # unreadable: written this moment where links are missing
                 who = (f"pid {holder.get('pid')} on {holder.get('host')}, since {holder.get('started')}"
                        if holder else "a process that is claiming it now")
                 raise SnakesimError(f"{option} {path}: another snakesim run is writing there ({who}); wait for "
                                     f"it to end or name another folder (its claim: {lock})")
             lock.unlink(missing_ok=True)         # left by a run that is gone (killed): taken over
-            continue
-        with os.fdopen(fd, "w") as fh:
-            fh.write(json.dumps(me))
-        return
     raise SnakesimError(f"{option} {path}: could not claim the folder ({lock} keeps reappearing); "
                         "is another run starting there?")
 

@@ -131,3 +131,30 @@ def test_a_claim_by_a_live_process_is_refused_and_one_by_a_dead_process_taken_ov
     prepare_out_dir(out, overwrite=True)                             # ours already: re-entrant
     release_out_dir(out)
     assert not (out / LOCK_FILE).exists()
+
+
+@pytest.mark.parametrize("links", [True, False], ids=["hard-links", "no-hard-links"])
+def test_a_claim_appears_with_its_holder_and_leaves_no_scratch(tmp_path, monkeypatch, links):
+    # the claim is linked into place whole, so a second run never reads it empty (the race that once left a
+    # refusal without the holder's pid); where os.link is refused (a file system without hard links), an
+    # exclusive create still claims the folder
+    import errno
+
+    out = tmp_path / "run"
+    out.mkdir()
+    seen = []
+    real_link = os.link
+
+    def link(src, dst):
+        seen.append(json.loads(Path(src).read_text())["pid"])        # whole before it becomes the claim
+        if not links:
+            raise PermissionError(errno.EPERM, "Operation not permitted")
+        return real_link(src, dst)
+
+    monkeypatch.setattr(os, "link", link)
+    prepare_out_dir(out, overwrite=True)
+    assert seen == [os.getpid()]
+    assert json.loads((out / LOCK_FILE).read_text())["pid"] == os.getpid()
+    assert sorted(p.name for p in out.iterdir()) == [LOCK_FILE]       # the private copy is gone
+    release_out_dir(out)
+    assert not any(out.iterdir())
