@@ -2,7 +2,8 @@
 
 ``prepare`` checks the dispersion file against the scene (every path resolved
 with the scene, component parameter names checked against the component's
-Params, metrics against what the scene records) before anything runs; run i's
+Params, metrics against what the scene records and which of its components
+report) before anything runs; run i's
 sample is drawn when run i is submitted (``Samples``), so any N starts at once,
 and an N whose records could not be held (``RECORD_BYTES`` a run, against the
 memory limit) is refused up front with the estimate. ``run_campaign`` submits the runs not yet recorded in OUT (a
@@ -23,7 +24,7 @@ from pathlib import Path
 from snakesim.framework.errors import ConfigError, SnakesimError
 
 from .dispersions import DispersionFile, Samples, grid_size, load_dispersions, set_item
-from .metrics import parse_metrics
+from .metrics import ReportMetric, parse_metrics, signal_metrics
 from .results import RecordLog, check_identity, write_table
 from .runner import RunTask, SceneSpec
 
@@ -112,6 +113,7 @@ def prepare(scene: SceneSpec, dispersion_file: str, n, seed: int | None = None, 
     for d in df.dispersions:
         resolved = _check_path(scene, d, samples[0][d.path], reg)
     _check_metric_signals(metrics, resolved, df.path)
+    _check_metric_reports(metrics, resolved, df.path, reg)
     check_campaign_size(n, resolved)
     return Plan(scene=scene, dispersions=df, n=n, seed=seed, samples=samples, metrics=metrics)
 
@@ -157,10 +159,28 @@ def _check_metric_signals(metrics, resolved, file: str) -> None:
     if not metrics:
         return
     ports = [r for r, _ in resolved.record]
-    for m in metrics:
+    for m in signal_metrics(metrics):
         if not any(m.signal == p or m.signal.startswith(p + ".") or m.signal.startswith(p + "[") for p in ports):
             raise ConfigError(f"'{m.signal}' is not recorded by the scene; recorded ports: {', '.join(ports) or 'none'}",
                               file, f"metrics.{m.name}.signal")
+
+
+def _check_metric_reports(metrics, resolved, file: str, registry) -> None:
+    """A report metric must name a component of the scene whose type reports (defines ``report``); whether
+    the key is there is known only after a run (the report's content), so that is the run's error."""
+    reports = [m for m in metrics or () if isinstance(m, ReportMetric)]
+    if not reports:
+        return
+    reporting = [name for name, _, cls in registry.classes_in(resolved) if callable(getattr(cls, "report", None))]
+    for m in reports:
+        if m.component not in resolved.components:
+            raise ConfigError(f"'{m.component}' is not a component of the scene; its components: "
+                              f"{', '.join(resolved.components) or 'none'} (those that report: "
+                              f"{', '.join(reporting) or 'none'})", file, f"metrics.{m.name}.report")
+        cls = registry.components.get(resolved.components[m.component].type)
+        if cls is not None and not callable(getattr(cls, "report", None)):
+            raise ConfigError(f"component '{m.component}' ({cls.__name__}) gives no report; the scene's components "
+                              f"that report: {', '.join(reporting) or 'none'}", file, f"metrics.{m.name}.report")
 
 
 class Progress:

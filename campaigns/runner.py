@@ -135,7 +135,7 @@ def execute(task: RunTask) -> dict:
                    completed=bool(sm["completed"]), sim_time_s=sm["sim_time_s"],
                    wall_time_s=sm["wall_time_s"], real_time_factor=sm["real_time_factor"], steps=sm["steps"])
         try:
-            rec["metrics"] = evaluate(task.metrics, result.log)
+            rec["metrics"] = evaluate(task.metrics, result.log, sm)     # sm: report metrics
         except Exception as e:          # a metric that cannot be computed is this run's error, not the campaign's
             rec.update(status="error", reason=f"metrics: {type(e).__name__}: {e}", metrics={})
     except RunTimeout as e:
