@@ -8,6 +8,8 @@
    height where the soil carries it: bisection on the contact kernel's normal force, virgin snow); T(s)
    is the kernel's axial force at that height, the towing forces' slips found by bisection on T(s) = F.
    Quasi-static (the screw's height and spin held), so it shows the soil law's curve, not a transient.
+   Beside it, dynamic: the snow-drawbar-pull scene as a user runs it at each towing force (the module on its
+   drawbar_carriage in a 1 cm snow bin, integrated for 3 s): the carriage's steady slip and the run's speed.
 2. Speed against screw rate: the forward phase of snow-screw-traverse (snow, terramechanics_contact) and of
    surface-screw-traverse (hard ice, terrains/flat-ice.yaml, screw_sdf_contact), each at its own sim
    settings; the tail's mean speed along the crescent's chord (+x) over the phase's last half.
@@ -142,7 +144,16 @@ def drawbar(quick: bool) -> dict:
         steady.append(0.5 * (lo + hi))
     return {"screws": names, "module_weight_N": weight, "sinkage_m": depth, "omega_rad_s": OMEGA,
             "slip": slips.tolist(), "thrust_N": thrust, "towing_force_N": tows.tolist(), "steady_slip": steady,
-            "max_drawbar_over_weight": max(thrust) / weight}
+            "dynamic": [towed(float(F)) for F in tows], "max_drawbar_over_weight": max(thrust) / weight}
+
+
+def towed(tow: float) -> dict:
+    """The snow-drawbar-pull scene at ``tow`` N, as a user runs it: the carriage's steady slip and the run's
+    speed (the module on its drawbar_carriage, integrated; the curve above is the kernel's alone)."""
+    r = load_session("snow-drawbar-pull", overrides=[f"tow={tow}"]).run()
+    rep = r.summary["reports"]["carriage"]
+    return {"tow_N": tow, "slip": rep["slip"], "travel_speed_m_s": rep["travel_speed_m_s"],
+            "real_time_factor": r.summary["real_time_factor"], "outcome": r.summary["outcome"]}
 
 
 # -- 2. speed against screw rate --------------------------------------------------------------------------
@@ -364,8 +375,11 @@ def table(out: dict) -> str:
              f"sinkage {100 * d['sinkage_m']:.2f} cm, {d['omega_rad_s']:g} rad/s",
              "   slip    thrust N    drawbar/weight"]
     lines += [f"   {s:5.2f}  {T:9.2f}    {T / d['module_weight_N']:6.3f}" for s, T in zip(d["slip"], d["thrust_N"])]
-    lines += ["   towing N   steady slip"]
-    lines += [f"   {F:8.2f}   {'—' if s is None else f'{s:.3f}'}" for F, s in zip(d["towing_force_N"], d["steady_slip"])]
+    lines += ["   towing N   steady slip   snow-drawbar-pull: slip   travel mm/s   RTF   outcome"]
+    dash = lambda v, fmt: "—".rjust(len(format(0.0, fmt))) if v is None else format(v, fmt)   # noqa: E731
+    lines += [f"   {F:8.2f}   {dash(s, '11.3f')}   {dash(y['slip'], '23.3f')}   {1e3 * y['travel_speed_m_s']:11.1f}  "
+              f"{y['real_time_factor']:5.1f}  {y['outcome']}"
+              for F, s, y in zip(d["towing_force_N"], d["steady_slip"], d["dynamic"])]
     lines += ["2. speed along the chord against screw rate", "   scene                    rad/s   m/s      RTF   outcome"]
     lines += [f"   {r['scene']:24s} {r['screw_rate_rad_s']:5.1f}  {r['speed_m_s']:7.4f}  {r['real_time_factor']:6.1f}  "
               f"{r['outcome']}" for r in out["speed"]]
@@ -416,6 +430,10 @@ def plot(out: dict, path: Path) -> None:
     ok = [(s, F) for s, F in zip(d["steady_slip"], d["towing_force_N"]) if s is not None]
     if ok:
         ax[0].plot([s for s, _ in ok], [F / d["module_weight_N"] for _, F in ok], "x", label="steady slip under tow")
+    dyn = [(y["slip"], y["tow_N"]) for y in d.get("dynamic", []) if y["slip"] is not None]
+    if dyn:
+        ax[0].plot([s for s, _ in dyn], [F / d["module_weight_N"] for _, F in dyn], "s", mfc="none",
+                   label="towed on the carriage (snow-drawbar-pull)")
     ax[0].set_xlabel("slip")
     ax[0].set_ylabel("drawbar pull / weight")
     ax[0].set_title("one EELS 1.0 module on snow")

@@ -1,26 +1,23 @@
-"""Dynamic drawbar test: one EELS 1.0 module towed on snow, against the slip its thrust curve predicts.
+"""Dynamic drawbar test: the snow-drawbar-pull scene (one EELS 1.0 module towed in a soil bin of snow) at its
+own settings, against the slip its thrust curve predicts.
 
-The rig (a single-wheel testbed's, for a screw pair): one module (data/towed_module.urdf: EELS 1.0's screw
-pair, 10 kg, the 10-module robot's mass per pair) in the multibody with gravity, on snow-field.yaml's soil at
-1 cm nodes (data/towed_module_snow.yaml), its screws driven at 3 rad/s by the scenes' joint PID (velocity
-mode, URDF torque limit), the ruts committed every tick, integrated by rosenbrock_w ROS2 with fixed steps and
-the Jacobian every step. A towing load F pulls the module back along −x. It starts at the height where virgin
-snow carries its weight (no settling overshoot: a deeper settling rut is climbed out of only over many screw
-lengths, a drift that outlasts any short run).
-
-The carriage: the multibody's URDF joints are revolute, continuous or fixed, on a free-flying root
-(components/multibody/urdf.py refuses prismatic joints), so the testbed's slides cannot be joints. ``Carriage``
-is the slide as a penalty on the module's link: stiff spring-dampers hold y, roll, pitch and yaw at 0 (the
-counter-rotating pair's yaw couple, which spun a free module, and the tow's pitch moment go into them), x
-(travel) and z (sinkage) stay free, and the constant −F x̂ is added. Its slopes are declared (a
-LinkWrenchJacobian, as the soil contact's), so the springs are implicit.
+The rig (a single-wheel testbed's, for a screw pair; assemblies/snow-drawbar-pull.yaml): one module
+(robots/specimens/eels-1.0-module.urdf: EELS 1.0's screw pair, 10 kg, the 10-module robot's mass per pair) in
+the multibody with gravity, on snow-field.yaml's soil at 1 cm nodes (terrains/snow-bin.yaml), its screws
+driven at 3 rad/s by the scenes' joint PID (velocity mode, URDF torque limit), the ruts committed every tick,
+integrated by rosenbrock_w ROS2 with fixed steps and the Jacobian every step. A towing load F pulls the
+module back along −x through the drawbar_carriage (components/terramechanics/drawbar_carriage.py: the slide
+as a penalty, y, roll, pitch and yaw held by declared springs, x and z free). It starts at the height where
+virgin snow carries its weight (the scene's ``start_height``, checked here against that balance: no
+settling overshoot, as a deeper settling rut is climbed out of only over many screw lengths, a drift that
+outlasts any short run).
 
 Step: 2 ms, not the snow scene's 20 ms. At 20 ms (ROS2, not stiffly accurate) the screw's spin read at the
 ticks is 7 % under the PID's 3 rad/s (the stages average it out: the PID integral does not wind up) and the
 travel is 0.5 %, 2.5 % and 12 % slow at F = 0, 20, 40 N (docs/terramechanics.md); at 2 ms the slip is within
 0.003 of 0.5 ms's.
 
-Measured over the window (the last 1.5 s of 3 s; the speed's time constant m / (dT/dv) ~ 10 ms, the
+Measured over the window (the carriage's steady_window, the last 1.5 s of 3 s; the speed's time constant m / (dT/dv) ~ 10 ms, the
 sinkage's a few steps): the slip s = 1 − v̄_x / (ω̄ r tan λ), v̄_x a straight-line fit of the carriage's x(t),
 ω̄ the mean spin; the contact's screw_slip output; the mean thrust.
 
@@ -55,111 +52,23 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from pydantic import Field
 
-from snakesim.components.multibody.robot_model import RobotModel
-from snakesim.components.multibody.robot_ports import link_shape
-from snakesim.framework import Component, Input, Output, Params, Uses
+from snakesim.framework.simulation import load
 
-DATA = Path(__file__).with_name("data")
-URDF = DATA / "towed_module.urdf"
-SNOW = DATA / "towed_module_snow.yaml"
-OMEGA = 3.0          # rad/s, the scenes' screw_speed
-DT = 0.002           # s (module docstring: why not the snow scene's 0.02)
-DURATION = 3.0       # s
-WINDOW = 1.5         # s, the last part of the run averaged
+SNOW = Path(__file__).resolve().parents[2] / "terrains" / "snow-bin.yaml"
+OMEGA = 3.0          # rad/s, the scene's screw_speed
+DT = 0.002           # s, the scene's step (module docstring: why not the snow scene's 0.02)
+DURATION = 3.0       # s, the scene's
+WINDOW = 1.5         # s, the carriage's steady_window: the last part of the run averaged
 TOWS = (0.0, 20.0, 40.0)     # N: free, mid, and at slip ≈ 0.65 (the pair's T(s) on virgin snow)
 G = 9.81
 COLUMNS = 15         # node columns a screw spans (L / cell)
 INTEGRATOR = 0.005   # slip, the 2 ms step's error (module docstring)
 
 
-class CarriageParams(Params):
-    link: str = Field("module", description="the carriage's link")
-    tow: float = Field(0.0, description="N, constant towing load along −x (world)")
-    stiffness: float = Field(2.0e4, gt=0, description="N/m on y; N·m/rad on roll, pitch, yaw")
-    damping: float = Field(2.0e3, ge=0, description="N·s/m on y; N·m·s/rad on roll, pitch, yaw")
-
-
-class Carriage(Component[CarriageParams]):
-    """A testbed carriage as a penalty: on one link, W = [−F, −k y − c v_y, 0, −k θ − c ω] (world axes, about
-    the link origin; θ the small-angle rotation vector of the link's axes from the world's, the vee of
-    (R − Rᵀ)/2), so x and z are free. Its slopes are declared: ∂W/∂twist = −c on y and ω, ∂W/∂δ = −k there.
-
-    in   link_poses[nl, 7], link_velocities[nl, 6]    the multibody's
-    out  wrenches[nl, 6]    N, N·m (feedthrough)
-    """
-
-    type_name = "test_carriage"
-    robot = Uses(RobotModel)
-    link_poses = Input(shape=link_shape(7), unit=None)
-    link_velocities = Input(shape=link_shape(6), unit=None)
-    wrenches = Output(shape=link_shape(6), unit=None, feedthrough=True)
-
-    def setup(self):
-        from snakesim.components.multibody.linearization import LinkWrenchJacobian
-
-        p, nl = self.p, self.robot.nl
-        self.row = self.robot.links.index(p.link)
-        held = np.array([0.0, 1.0, 0.0, 1.0, 1.0, 1.0])
-        d_twist, d_pose = np.zeros((nl, 6, 6)), np.zeros((nl, 6, 6))
-        d_twist[self.row] = -p.damping * np.diag(held)
-        d_pose[self.row] = -p.stiffness * np.diag(held)
-        self._jac = LinkWrenchJacobian(rows=np.array([self.row]), d_twist=d_twist, d_pose=d_pose,
-                                       inputs=("link_poses", "link_velocities"))
-
-    def port_jacobian(self, port, t, x, u, y):
-        return self._jac if port == "wrenches" else None
-
-    def output(self, t, x, u, y):
-        p, r = self.p, self.row
-        qx, qy, qz, qw = u.link_poses[r, 3:7]
-        # vee((R − Rᵀ)/2) of the link's rotation: 2 qw (qx, qy, qz), the rotation vector to first order
-        theta = 2.0 * qw * np.array([qx, qy, qz])
-        v = u.link_velocities[r]
-        w = y.wrenches
-        w[...] = 0.0
-        w[r, 0] = -p.tow
-        w[r, 1] = -p.stiffness * u.link_poses[r, 1] - p.damping * v[1]
-        w[r, 3:6] = -p.stiffness * theta - p.damping * v[3:6]
-
-
-#: the rig's integrator (module docstring): rosenbrock_w ROS2, fixed steps, J at every step
-RIG_INTEGRATOR = {"name": "rosenbrock_w", "params": {"method": "ros2", "step_control": "fixed", "jacobian_every": 1}}
-
-
-def build_rig(tow: float, duration: float, z0: float, dt: float = DT, integrator: dict = RIG_INTEGRATOR):
-    """The towed module (module docstring) as a Simulation, F = ``tow`` N, its origin starting at height ``z0``."""
-    from snakesim.components.control.pid import JointPid
-    from snakesim.components.multibody.component import Multibody
-    from snakesim.components.signals.sources import Constant
-    from snakesim.components.terrain.source import TerrainSource
-    from snakesim.components.terramechanics.contact import TerramechanicsContact
-    from snakesim.components.tethers.wrench_sum import WrenchSum
-    from snakesim.framework import Builder
-
-    b = Builder(dt=dt, duration=duration, record_rate=1.0 / dt, integrator=integrator)
-    robot = b.add(Multibody("robot", urdf=str(URDF), base_position=(0.0, 0.0, z0), v0={"screw_front": OMEGA}))
-    terrain = b.add(TerrainSource("terrain", {"name": str(SNOW)}))
-    contact = b.add(TerramechanicsContact("contact"))
-    carriage = b.add(Carriage("carriage", tow=tow))
-    total = b.add(WrenchSum("total", nl=3))            # the URDF's three links
-    pid = b.add(JointPid("pid"))
-    speed = b.add(Constant("speed", value=OMEGA, n=1))
-    b.connect(terrain.out.terrain, contact.inp.terrain)
-    for c in (contact, carriage):
-        b.connect(robot.out.link_poses, c.inp.link_poses)
-        b.connect(robot.out.link_velocities, c.inp.link_velocities)
-    b.connect(robot.out.joint_v, contact.inp.joint_v)
-    b.connect(robot.out.joint_v, pid.inp.v)
-    b.connect(robot.out.joint_q, pid.inp.q)
-    b.connect(speed.out.y, pid.inp.setpoint)
-    b.connect(pid.out.tau, robot.inp.tau)
-    b.connect(contact.out.wrenches, total.inp.u0)
-    b.connect(carriage.out.wrenches, total.inp.u1)
-    b.connect(total.out.y, robot.inp.wrenches)
-    b.record(robot.out.link_poses, robot.out.joint_v, contact.out.screw_slip, contact.out.screw_thrust)
-    return b.build()
+def rig(tow: float, **sim):
+    """The scene towed at ``tow`` N, recorded at every step (the carriage's own sampling)."""
+    return load("snow-drawbar-pull", overrides=[f"tow={tow}"], sim_overrides={"record_rate": 1.0 / DT, **sim})
 
 
 class ThrustCurve:
@@ -239,13 +148,11 @@ def start_height(contact, weight: float) -> float:
 
 @pytest.fixture(scope="module")
 def runs():
-    """Per towing force: the run's window means and both predictions (module docstring)."""
-    probe = build_rig(0.0, DT, 0.09)
-    contact = probe.components["contact"]
-    z0 = start_height(contact, sum(link.mass for link in contact.robot.tree.links) * G)
+    """Per towing force: the run's window means, the carriage's report and both predictions (module docstring)."""
     out = {}
     for tow in TOWS:
-        sim = build_rig(tow, DURATION, z0)
+        sim = rig(tow)
+        assert sim.dt == DT
         sim.advance_to(DURATION)
         log, contact = sim.log, sim.components["contact"]
         t, pose = log["t"], log["robot.link_poses"]
@@ -255,11 +162,12 @@ def runs():
         z = float(pose[w, 2].mean())
         frozen = ThrustCurve(contact, sim.plan.caches["contact"].terrain, [pose[-1, 0]], pose[-1, 2], omega)
         fresh = virgin(contact, z, omega)
-        r = dict(v=v, omega=omega, z=z, cells=abs(pose[w, 0][-1] - pose[w, 0][0]) / 0.01,
+        r = dict(v=v, omega=omega, z=z, z0=float(pose[0, 2]), cells=abs(pose[w, 0][-1] - pose[w, 0][0]) / 0.01,
                  slip=1.0 - v / (omega * frozen.r * math.tan(frozen.lead)),
                  slip_output=float(log["contact.screw_slip"][w].mean()),
                  thrust=float(log["contact.screw_thrust"][w].sum(axis=1).mean()),
-                 sway=float(np.abs(pose[w, 1]).max()), yaw=float(np.abs(2.0 * pose[w, 5] * pose[w, 6]).max()))
+                 sway=float(np.abs(pose[w, 1]).max()), yaw=float(np.abs(2.0 * pose[w, 5] * pose[w, 6]).max()),
+                 report=sim.finish().summary["reports"]["carriage"], contact=contact)
         r["frozen"] = frozen.slip_at(tow)
         r["frozen_tol"] = frozen.tolerance(r["frozen"])
         r["frozen_wrong"] = ThrustCurve(contact, frozen.terrain, frozen.xs, frozen.z, omega, 0.25).slip_at(tow)
@@ -269,6 +177,31 @@ def runs():
         r["virgin_tol"] = fresh.tolerance(r["virgin"])
         out[tow] = r
     return out
+
+
+@pytest.mark.slow
+def test_the_scene_starts_where_virgin_snow_carries_the_module(runs):
+    """The scene's start_height is the balance of the module's weight and virgin snow's vertical force (pressure
+    and shear at slip 0.3), to 0.5 mm (a node's 1 cm at the screw's flank slope changes it by ~0.3 mm)."""
+    r = runs[0.0]
+    contact = r["contact"]
+    weight = sum(link.mass for link in contact.robot.tree.links) * G
+    assert weight == pytest.approx(10.0 * G)
+    assert abs(r["z0"] - start_height(contact, weight)) < 5e-4, r["z0"]
+
+
+@pytest.mark.slow
+def test_the_carriage_reports_the_runs_slip(runs):
+    """reports.carriage: the tow, and the slip, travel and nut speeds over its window equal those computed here
+    from the recorded poses and spin (recorded at every step, as the carriage samples)."""
+    for tow, r in runs.items():
+        rep = r["report"]
+        assert rep["tow_N"] == tow and rep["link"] == "module"
+        assert rep["window_s"] == pytest.approx([DURATION - WINDOW, DURATION])
+        assert rep["travel_speed_m_s"] == pytest.approx(r["v"], rel=1e-9, abs=1e-12)
+        assert rep["nut_speed_m_s"] == pytest.approx(r["omega"] * 0.09 * math.tan(0.35), rel=1e-9)
+        assert rep["slip"] == pytest.approx(r["slip"], abs=1e-9)
+        assert abs(rep["settled_m"]) < 2e-3          # started where the snow carries it
 
 
 @pytest.mark.slow
