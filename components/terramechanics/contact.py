@@ -85,6 +85,11 @@ class TerramechanicsContactParams(Params):
                                                  "slope (∝ 1 / v_ε) the Jacobian carries")
 
 
+#: m/s, the nut speed ω r tan λ from which a screw counts as driven in the report's slip: a held screw's PID
+#: jitter (~1e-3 rad/s) makes a slip of noise; a screw at 0.3 rad/s (EELS 1.0: 1 cm/s) is driven
+DRIVEN_NUT_SPEED = 0.01
+
+
 def _per_screw(c):
     return (c.screws.ns,)
 
@@ -277,16 +282,16 @@ class TerramechanicsContact(Component[TerramechanicsContactParams]):
         run.contact_ticks += touching
         run.sink_sum += np.where(touching, ps[:, SINKAGE], 0.0)
         np.maximum(run.sink_max, ps[:, SINKAGE], out=run.sink_max)
-        # driven: its ideal nut speed ω r tan λ at least v_ε (slower, slip is a ratio of noise: a held screw)
+        # driven: its ideal nut speed ω r tan λ at least DRIVEN_NUT_SPEED (slower, slip is a ratio of noise)
         g = self.geometry
         nut = np.abs(g.geo[:, 4] * u.joint_v[g.rows[:, 2]]) * g.radius * np.tan(g.geo[:, 2])
-        driven = touching & (nut >= p.v_eps)
+        driven = touching & (nut >= DRIVEN_NUT_SPEED)
         run.slip_ticks += driven
         run.slip_sum += np.where(driven, ps[:, SLIP], 0.0)
 
     def report(self, cache, summary):
         """summary.json's ``reports.contact``: per screw the mean sinkage over the ticks it touched the soil,
-        the deepest, the mean slip while driven in contact (nut speed ω r tan λ ≥ v_ε); the terrain's rut
+        the deepest, the mean slip while driven in contact (nut speed ω r tan λ ≥ DRIVEN_NUT_SPEED); the terrain's rut
         (deformable_files.py)."""
         run = cache
         if run is None or run.terrain is None:
