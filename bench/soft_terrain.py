@@ -9,7 +9,8 @@
    is the kernel's axial force at that height, the towing forces' slips found by bisection on T(s) = F.
    Quasi-static (the screw's height and spin held), so it shows the soil law's curve, not a transient.
    Beside it, dynamic: the snow-drawbar-pull scene as a user runs it at each towing force (the module on its
-   drawbar_carriage in a 1 cm snow bin, integrated for 3 s): the carriage's steady slip and the run's speed.
+   drawbar_carriage in a 1 cm snow bin, integrated for 3 s): the carriage's steady slip and the run's speed;
+   and driven at set slips (--quick: three), braking to near stall: the carriage's drawbar pull.
 2. Speed against screw rate: the forward phase of snow-screw-traverse (snow, terramechanics_contact) and of
    surface-screw-traverse (hard ice, terrains/flat-ice.yaml, screw_sdf_contact), each at its own sim
    settings; the tail's mean speed along the crescent's chord (+x) over the phase's last half.
@@ -144,7 +145,19 @@ def drawbar(quick: bool) -> dict:
         steady.append(0.5 * (lo + hi))
     return {"screws": names, "module_weight_N": weight, "sinkage_m": depth, "omega_rad_s": OMEGA,
             "slip": slips.tolist(), "thrust_N": thrust, "towing_force_N": tows.tolist(), "steady_slip": steady,
-            "dynamic": [towed(float(F)) for F in tows], "max_drawbar_over_weight": max(thrust) / weight}
+            "dynamic": [towed(float(F)) for F in tows],
+            "driven": [driven(float(sl), rig.v_ideal) for sl in ((-0.2, 0.3, 0.9) if quick else (-0.2, 0.0, 0.2, 0.4,
+                                                                                                   0.6, 0.8, 0.9))],
+            "max_drawbar_over_weight": max(thrust) / weight}
+
+
+def driven(slip: float, v_nut: float) -> dict:
+    """The snow-drawbar-pull scene with the carriage driving the module at (1 − slip) of the nut speed: the
+    slip set, the drawbar pull measured (the carriage's report)."""
+    r = load_session("snow-drawbar-pull", overrides=["tow=0", f"speed={(1.0 - slip) * v_nut}"]).run()
+    rep = r.summary["reports"]["carriage"]
+    return {"slip_set": slip, "slip": rep["slip"], "drawbar_pull_N": rep["drawbar_pull_N"],
+            "real_time_factor": r.summary["real_time_factor"], "outcome": r.summary["outcome"]}
 
 
 def towed(tow: float) -> dict:
@@ -380,6 +393,9 @@ def table(out: dict) -> str:
     lines += [f"   {F:8.2f}   {dash(s, '11.3f')}   {dash(y['slip'], '23.3f')}   {1e3 * y['travel_speed_m_s']:11.1f}  "
               f"{y['real_time_factor']:5.1f}  {y['outcome']}"
               for F, s, y in zip(d["towing_force_N"], d["steady_slip"], d["dynamic"])]
+    lines += ["   snow-drawbar-pull driven: slip set   slip   drawbar N   RTF   outcome"]
+    lines += [f"   {y['slip_set']:+29.2f}  {y['slip']:6.3f}  {y['drawbar_pull_N']:9.2f}  {y['real_time_factor']:5.1f}  "
+              f"{y['outcome']}" for y in d["driven"]]
     lines += ["2. speed along the chord against screw rate", "   scene                    rad/s   m/s      RTF   outcome"]
     lines += [f"   {r['scene']:24s} {r['screw_rate_rad_s']:5.1f}  {r['speed_m_s']:7.4f}  {r['real_time_factor']:6.1f}  "
               f"{r['outcome']}" for r in out["speed"]]
@@ -434,6 +450,9 @@ def plot(out: dict, path: Path) -> None:
     if dyn:
         ax[0].plot([s for s, _ in dyn], [F / d["module_weight_N"] for _, F in dyn], "s", mfc="none",
                    label="towed on the carriage (snow-drawbar-pull)")
+    ax[0].plot([y["slip"] for y in d.get("driven", [])], [y["drawbar_pull_N"] / d["module_weight_N"]
+                                                         for y in d.get("driven", [])], "^", mfc="none",
+               label="driven at a set slip (snow-drawbar-pull)")
     ax[0].set_xlabel("slip")
     ax[0].set_ylabel("drawbar pull / weight")
     ax[0].set_title("one EELS 1.0 module on snow")

@@ -1,6 +1,7 @@
 """drawbar_carriage alone (components/terramechanics/drawbar_carriage.py), on the drawbar test's specimen:
-the slide's wrench against its closed form, its declared slopes against finite differences of it, the
-report's slip on a prescribed track, and a link that is not the robot's named with the valid ones."""
+the slide's wrench against its closed form, towed and driven, its declared slopes against finite differences
+of it, the report's slip and drawbar pull on a prescribed track, and the bad settings named (a link that is
+not the robot's, a carriage both towed and driven)."""
 
 from __future__ import annotations
 
@@ -61,8 +62,20 @@ def test_the_slide_tows_holds_and_leaves_x_and_z_free(robot):
     assert not np.delete(w, row, axis=0).any()        # every other link untouched
 
 
-def test_declared_slopes_are_the_wrenchs_derivatives(robot):
-    h = carriage(robot)
+def test_the_driven_slide_holds_x_to_its_rail(robot):
+    # driven at V from x0: f_x = −k (x − x0 − V t) − c (v_x − V), the rest as towed; no tow
+    V, x0, t = 0.1, 0.05, 2.0
+    h = carriage(robot, tow=0.0, speed=V, x0=x0)
+    poses, vels, row = state(robot, [0.3, 0.0, 0.0], [0, 0, 0], [0.12, 0, 0, 0, 0, 0])
+    h.inputs.link_poses, h.inputs.link_velocities = poses, vels
+    w = h.outputs(t)["wrenches"]
+    assert w[row, 0] == pytest.approx(-K * (0.3 - x0 - V * t) - C * (0.12 - V))
+    assert w[row, 1:].tolist() == [0.0] * 5
+
+
+@pytest.mark.parametrize("mode", [{}, {"tow": 0.0, "speed": 0.07}], ids=["towed", "driven"])
+def test_declared_slopes_are_the_wrenchs_derivatives(robot, mode):
+    h = carriage(robot, **mode)
     poses, vels, row = state(robot, [0.2, 0.005, 0.01], [1e-3, 2e-3, -1e-3], [0.05, 0.01, 0.0, 0.02, 0.0, -0.1])
     h.inputs.link_poses, h.inputs.link_velocities = poses, vels
     jac = h.c.port_jacobian("wrenches", 0.0, None, h.u, None)
@@ -111,7 +124,31 @@ def test_report_is_the_slip_of_the_track_it_sampled(robot):
     assert rep["nut_speed_m_s"] == pytest.approx(nut, rel=1e-12)
     assert rep["slip"] == pytest.approx(1.0 - v / nut, rel=1e-9)
     assert rep["settled_m"] == pytest.approx(0.001, rel=1e-6)
+    assert rep["drawbar_pull_N"] == TOW
     assert DrawbarCarriage.format_report(rep)[0].startswith("drawbar: tow 25 N, travel 50.0 mm/s")
+
+
+def test_driven_report_pull_is_the_rails_mean_force(robot):
+    # the module 2 mm ahead of its rail throughout the window: pull = k · 2 mm (the damper's mean is zero, the
+    # mean velocity being the rail's), whatever the velocities read at the ticks
+    V, x0 = 0.06, 0.1
+    h = carriage(robot, tow=0.0, speed=V, x0=x0, steady_window=1.0)
+    for i in range(201):
+        t = i * 0.01
+        poses, vels, row = state(robot, [x0 + V * t + (0.002 if t >= 1.0 - 1e-9 else 0.0), 0.0, 0.0], [0, 0, 0],
+                                 [V + 0.003 * (-1) ** i, 0, 0, 0, 0, 0])
+        h.inputs.link_poses, h.inputs.link_velocities = poses, vels
+        h.c.check(t, h.u, i == 0)
+    rep = h.c.report(h.u.cache, {})
+    assert rep["mode"] == "driven" and rep["speed_set_m_s"] == V
+    assert rep["travel_speed_m_s"] == pytest.approx(V, rel=1e-9)
+    assert rep["drawbar_pull_N"] == pytest.approx(K * 0.002, rel=1e-6)
+    assert "drawbar pull 40.00 N" in DrawbarCarriage.format_report(rep)[0]
+
+
+def test_a_carriage_both_towed_and_driven_is_refused_naming_both(robot):
+    with pytest.raises(ValueError, match=r"tow = 25 N and speed = 0.05 m/s.*not both"):
+        carriage(robot, speed=0.05)
 
 
 def test_a_link_the_robot_does_not_have_is_named_with_the_valid_ones(robot):
