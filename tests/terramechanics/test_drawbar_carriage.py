@@ -159,9 +159,11 @@ def test_a_link_the_robot_does_not_have_is_named_with_the_valid_ones(robot):
 
 
 @pytest.mark.slow
-def test_the_shipped_sweep_tabulates_slip_against_tow(tmp_path):
-    # campaigns/dispersions/drawbar-pull.yaml on the scene, its first two loads, short runs: every metric is a
-    # number and the harder-towed module is the slower (the full curve: docs/terramechanics.md)
+@pytest.mark.parametrize("campaign, column, values", [("drawbar-pull", "tow", [0.0, 10.0]),
+                                                      ("drawbar-slip", "speed", [0.11824, 0.09854])])
+def test_the_shipped_sweeps_tabulate_slip_against_pull(tmp_path, campaign, column, values):
+    # campaigns/dispersions/*.yaml on the scene, their first two points, short runs: every metric a number,
+    # and the second point (towed harder, or driven slower) slips more at a larger pull
     import csv
     import subprocess
     import sys
@@ -169,14 +171,14 @@ def test_the_shipped_sweep_tabulates_slip_against_tow(tmp_path):
     root = Path(__file__).resolve().parents[2]
     out = tmp_path / "sweep"
     done = subprocess.run([sys.executable, "-c", "from snakesim.framework.cli import main; main()", "sweep",
-                           "snow-drawbar-pull", "--dispersions", str(root / "campaigns/dispersions/drawbar-pull.yaml"),
+                           "snow-drawbar-pull", "--dispersions", str(root / f"campaigns/dispersions/{campaign}.yaml"),
                            "-n", "2", "--duration", "0.4", "--workers", "1", "--no-plots", "--quiet", "--out", str(out)],
                           capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr[-2000:]
     with open(out / "results.csv", newline="") as fh:
         rows = list(csv.DictReader(fh))
-    assert [float(r["tow"]) for r in rows] == [0.0, 10.0]
+    assert [float(r[column]) for r in rows] == values
     for r in rows:
-        assert all(math.isfinite(float(r[k])) for k in ("slip", "travel_speed", "nut_speed", "sinkage_front"))
-    assert float(rows[1]["travel_speed"]) < float(rows[0]["travel_speed"])
+        assert all(math.isfinite(float(r[k])) for k in ("slip", "drawbar_pull", "nut_speed", "sinkage_front"))
     assert float(rows[1]["slip"]) > float(rows[0]["slip"])
+    assert float(rows[1]["drawbar_pull"]) > float(rows[0]["drawbar_pull"])
