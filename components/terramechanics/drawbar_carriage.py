@@ -12,7 +12,7 @@ at its origin, in world axes:
     f_x = −k (x − x₀ − V t) − c (v_x − V)          driven (``speed`` V, m/s: the carriage on a rail from x₀)
 
 θ the small-angle rotation vector of the link's axes from the world's: sinkage z and, towed, travel x stay
-free; driven, x follows the rail V t behind a lag of (drawbar pull) / k (2.5 mm for 50 N at the default);
+free; driven, x follows the rail x₀ + V t, ahead of it by (drawbar pull) / k (2.5 mm for 50 N by default);
 sway y, roll, pitch and yaw are held (a counter-rotating pair's yaw couple and the tow's pitch moment go
 into the springs: ~1 N·m over the default 2·10⁴ N·m/rad is 0.05 mrad). The link starts with its axes on the
 world's and its origin at y = 0 (the springs' rest). The slopes are declared (a LinkWrenchJacobian, as the
