@@ -10,6 +10,9 @@ under ``reports/<name>``, printed by ``snakesim run``; also usable as campaign m
     lateral    ‖(p − p(t₀)) − s û‖, the largest over the run (m): how far it strayed off the path
     speed      mean s/(t − t₀) over the run, and the steady speed: least-squares slope of s(t) over
                the last ``steady_window`` seconds (m/s)
+    made good  ‖(p − p(t₀))_xy‖ at the last sample, the horizontal distance made good whatever the path's
+               direction, and the horizontal path length Σ ‖Δp_xy‖ over the samples (m): a schedule that goes
+               out and back makes little good over a long path
     reference  optional ``reference_speed`` (m/s) to compare with (e.g. a screw's analytic steady speed,
                components/contact/steady_state.py, or its no-slip advance ω r tan λ):
                efficiency = steady / reference
@@ -51,6 +54,7 @@ class _Track:
     def __init__(self):
         self.t: list[float] = []
         self.s: list[float] = []
+        self.xy: list[tuple[float, float]] = []
         self.xd = None
 
 
@@ -95,6 +99,7 @@ class TraverseEvaluation(Component[TraverseEvaluationParams]):
         xd[LATERAL] = max(xd[LATERAL], float(np.linalg.norm(d - s * self._dir)))
         w.t.append(t)
         w.s.append(s)
+        w.xy.append((float(pos[0]), float(pos[1])))
 
     # -- the run's report (framework/run_reports.py) -------------------------------------------
     def report(self, cache, summary: dict) -> dict:
@@ -106,9 +111,12 @@ class TraverseEvaluation(Component[TraverseEvaluationParams]):
         elapsed = float(x[T_LAST] - x[T0])
         late = t >= t[-1] - p.steady_window
         steady = float(np.polyfit(t[late], s[late], 1)[0]) if late.sum() >= 2 else None
+        xy = np.asarray(cache.xy)
         r = {"started": True, "start_s": float(x[T0]), "elapsed_s": elapsed,
              "direction": [float(v) for v in self._dir], "reference_link": self.reference_name,
              "distance_m": float(x[S]), "lateral_max_m": float(x[LATERAL]),
+             "made_good_m": float(np.hypot(*(xy[-1] - xy[0]))),
+             "path_length_m": float(np.hypot(*np.diff(xy, axis=0).T).sum()),
              "mean_speed_m_s": float(x[S]) / elapsed if elapsed > 0 else None,
              "steady_speed_m_s": steady, "steady_window_s": p.steady_window}
         if p.reference_speed is not None:
@@ -125,4 +133,5 @@ class TraverseEvaluation(Component[TraverseEvaluationParams]):
                 f"{r['steady_speed_m_s']:.3g} m/s over the last {r['steady_window_s']:.3g} s")
         if r.get("efficiency") is not None:
             line += f" ({100 * r['efficiency']:.0f} % of the reference {r['reference_speed_m_s']:.3g} m/s)"
-        return [line, f"largest lateral excursion: {r['lateral_max_m'] * 1e3:.3g} mm"]
+        return [line, f"largest lateral excursion: {r['lateral_max_m'] * 1e3:.3g} mm; made good "
+                      f"{r['made_good_m']:.3g} m over a {r['path_length_m']:.3g} m path (horizontal)"]

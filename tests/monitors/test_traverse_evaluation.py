@@ -48,8 +48,13 @@ def test_scripted_path_gives_distance_speed_and_lateral_exactly():
     assert r["steady_speed_m_s"] == pytest.approx(0.5)            # the fit over the last 2 s: 4.0 .. 6.0
     assert r["efficiency"] == pytest.approx(0.5 / 0.4)
     assert r["direction"] == pytest.approx([0.6, 0.8, 0.0])
+    # made good: 1.9 m along û (the bump is back on the line by the end); the path: 1.9 m plus the bump's out
+    # and back, each leg the hypotenuse of 0.02 m along û (0.1 s at 0.2 m/s) and 0.05 m across
+    assert r["made_good_m"] == pytest.approx(1.9)
+    assert r["path_length_m"] == pytest.approx(1.9 - 0.04 + 2 * np.hypot(0.02, 0.05))
     lines = TraverseEvaluation.format_report(r)
     assert "+1.9 m along the path" in lines[0] and "125 % of the reference" in lines[0]
+    assert "made good 1.9 m over a 1.97 m path" in lines[1], lines[1]
 
 
 def test_a_run_that_never_reaches_start_reports_so():
