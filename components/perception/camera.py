@@ -48,7 +48,7 @@ from .mount import SensorMount, mount_on, quaternion_xyzw
 from .ray_caster import CastBuffers, RayBundle, in_chunks, interleaved
 from .ray_casting import RayCaster
 from .hit_kernels import develop
-from .labels import LABEL_DTYPE, labels_of, scatter
+from .labels import LABEL_DTYPE, NOTHING, labels_of
 
 Vec3 = tuple[float, float, float]
 #: shadow rays start this far off the surface (m), so a surface does not shadow itself
@@ -179,6 +179,11 @@ class _Camera(Component):
         self._rays = np.flatnonzero(np.isfinite(d).all(axis=1) & np.isfinite(o).all(axis=1))
         self._rays = self._rays[interleaved(len(self._rays))]
         self._o, self._d = np.ascontiguousarray(o[self._rays]), np.ascontiguousarray(d[self._rays])
+        # the rays' optical-frame z (a depth's), contiguous: a render reads them per pixel
+        self._oz, self._dz = self._o[:, 2].copy(), self._d[:, 2].copy()
+        # every ray writes its pixel, hit or not (develop): only the pixels without a ray are filled apart
+        self._unrayed = np.setdiff1d(np.arange(p.width * p.height), self._rays)
+        self._unshadowed = np.zeros(len(self._d), dtype=np.bool_)      # read-only use: no shadow rays
         self._bundle = RayBundle(self._o, self._d)             # binned once: finds the rays near the robot
         self._bundle.image = (p.width, p.height, self._rays)   # which pixel each ray is: a back end may rasterise
         self._buffers = CastBuffers(len(self._d))              # reused by every render (hits are used at once)
@@ -207,25 +212,28 @@ class _Camera(Component):
         hits, o_w, d_w = world.cast_from(R, p_w, self._o, self._d, prm.max_range, prm.near, self._bundle,
                                             self._buffers, prm.terrain_hits == "exact", **extra)
         headlamp = light.kind == "headlamp"
-        shadowed = np.zeros(len(d_w), dtype=np.bool_)
+        shadowed = self._unshadowed
         if not headlamp and light.shadows:
+            shadowed = np.zeros(len(d_w), dtype=np.bool_)
             hit = np.flatnonzero(np.isfinite(hits.distance))
             lit = hit[hits.normal[hit] @ self._sun > 0]
             p_hit = o_w[lit] + hits.distance[lit, None] * d_w[lit] + SHADOW_OFFSET * hits.normal[lit]
             shadowed[lit] = world.cast(p_hit, np.broadcast_to(self._sun, p_hit.shape), prm.max_range).hit
         channels = 3 if prm.color else 1
-        image = np.full((h * w, channels), prm.background, dtype=np.float32)
-        rng = np.full(h * w, np.nan, dtype=np.float32)
-        depth = np.full(h * w, np.nan, dtype=np.float32)
-        label = np.zeros(h * w, dtype=LABEL_DTYPE)
+        # fresh arrays (the frame outlives this step), written once each: by develop, pixel by pixel
+        image = np.empty((h * w, channels), dtype=np.float32)
+        rng, depth = np.empty(h * w, dtype=np.float32), np.empty(h * w, dtype=np.float32)
+        label = np.empty(h * w, dtype=LABEL_DTYPE)
+        if len(self._unrayed):
+            image[self._unrayed], rng[self._unrayed], depth[self._unrayed] = prm.background, np.nan, np.nan
+            label[self._unrayed] = NOTHING
         ray_label = labels_of(hits)
         reflect = hits.color if prm.color else hits.albedo[:, None]
 
         def pixels(c, k):
-            develop(self._rays[k], self._o[k, 2], self._d[k, 2], d_w[k], hits.distance[k], hits.normal[k],
+            develop(self._rays[k], self._oz[k], self._dz[k], d_w[k], hits.distance[k], hits.normal[k],
                     reflect[k], headlamp, self._sun, light.intensity, light.ambient, light.reference_range,
-                    shadowed[k], image, depth, rng)
-            scatter(self._rays[k], ray_label[k], label)
+                    shadowed[k], ray_label[k], prm.background, image, depth, rng, label)
 
         in_chunks(pixels, len(d_w))
         img = image.reshape(h, w, channels)

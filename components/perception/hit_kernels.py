@@ -20,19 +20,24 @@ hits, and hits into pixels, without a Python or NumPy pass per quantity.
                       that meet its box before their nearest hit so far (far)
     take_link_hits    a link's Embree hits (nearer than the best so far, by construction) into
                       the per-ray best: distance, robot face, normal turned into the world
-    take_mount_hits   the same for the hits of a sensor's bundle on the link it is fixed to,
-                      cast once in that link's frame (a link cannot move against itself), where
-                      nearer than the best so far
+    take_mount_hits   the same for the hits of a sensor's bundle on the link it is fixed to (and
+                      the links fixed to that one), cast once in that link's frame (a link cannot
+                      move against itself), where nearer than the best so far
+    gather_reaching   the rays whose segment up to their best hit so far meets a box (the
+                      terrain's bounds), gathered for Embree; scatter_hits puts its hits back
     finish_hits       per ray, the final hit: range from the origin, unit normal facing the ray,
                       albedo, colour, link row, material, and whether the hit is on a face that
                       only approximates a curved terrain
-    develop           per hit pixel, Lambertian shading (.reflectance) with a headlamp or a sun,
-                      and the pixel's range and optical-frame depth
+    develop           per pixel its label and, where hit, Lambertian shading (.reflectance) with a
+                      headlamp or a sun, and the pixel's range and optical-frame depth
 
 Every kernel is serial and works on one chunk of rays: the caster runs the chunks in threads
 (these kernels release the GIL; ray_caster.in_chunks). No numba parallel region:
 on a loaded machine its workers wait on descheduled threads (measured: a 65k-ray prange
-kernel of 0.25 ms took 9 ms on average with the 2 cores busy).
+kernel of 0.25 ms took 9 ms on average with the 2 cores busy). A kernel that writes arrays reads
+a matrix's entries into scalars first (``R_entries``) and its inlined helpers take scalars, not
+arrays: numba cannot tell that the arrays do not overlap, so it would read the matrix again after
+every write, and an inlined helper's array arguments cost a reference count each per call.
 """
 
 from __future__ import annotations
@@ -47,16 +52,29 @@ MISS = -1
 ROBOT = 2
 
 
+@njit(cache=True, nogil=True, inline="always")
+def R_entries(R):
+    """A 3x3 matrix's entries as scalars, row by row: a loop that writes arrays then keeps them in
+    registers (read from R it would read them again after every write: the arrays might overlap)."""
+    return R[0, 0], R[0, 1], R[0, 2], R[1, 0], R[1, 1], R[1, 2], R[2, 0], R[2, 1], R[2, 2]
+
+
 @njit(cache=True, nogil=True)
 def rays_to_world(o_l, d_l, R, p, min_range, o_w, d_w, start32, d32):
     """o_w = p + R·o_l, d_w = R·d_l per ray; start32 = o_w + min_range·d_w and d32 in float32."""
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = R_entries(R)
+    p0, p1, p2 = p[0], p[1], p[2]
     for i in range(o_l.shape[0]):
-        for a in range(3):
-            o = p[a] + R[a, 0] * o_l[i, 0] + R[a, 1] * o_l[i, 1] + R[a, 2] * o_l[i, 2]
-            d = R[a, 0] * d_l[i, 0] + R[a, 1] * d_l[i, 1] + R[a, 2] * d_l[i, 2]
-            o_w[i, a], d_w[i, a] = o, d
-            start32[i, a] = o + min_range * d
-            d32[i, a] = d
+        x, y, z = o_l[i, 0], o_l[i, 1], o_l[i, 2]
+        o0 = p0 + r00 * x + r01 * y + r02 * z
+        o1 = p1 + r10 * x + r11 * y + r12 * z
+        o2 = p2 + r20 * x + r21 * y + r22 * z
+        x, y, z = d_l[i, 0], d_l[i, 1], d_l[i, 2]
+        d0, d1, d2 = r00 * x + r01 * y + r02 * z, r10 * x + r11 * y + r12 * z, r20 * x + r21 * y + r22 * z
+        o_w[i, 0], o_w[i, 1], o_w[i, 2] = o0, o1, o2
+        d_w[i, 0], d_w[i, 1], d_w[i, 2] = d0, d1, d2
+        start32[i, 0], start32[i, 1], start32[i, 2] = o0 + min_range * d0, o1 + min_range * d1, o2 + min_range * d2
+        d32[i, 0], d32[i, 1], d32[i, 2] = d0, d1, d2
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -234,6 +252,50 @@ def bundle_link_rays(o_b, d_b, bin_first, bin_rays, bin_axis, bin_cos, bin_sin, 
 
 
 @njit(cache=True, nogil=True)
+def gather_reaching(start, d, far, box_lo, box_hi, keep, start_out, d_out, far_out):
+    """The rays (starts, directions (n, 3), far limits: Embree's float32 rays) whose segment up to
+    their far limit, 0 <= t <= far, meets the box [box_lo, box_hi] (a scene's bounds), gathered in
+    order: their indices into ``keep``, the rays into ``start_out``, ``d_out``, ``far_out``; -> how
+    many. The others cannot hit anything in it nearer."""
+    n = 0
+    for i in range(start.shape[0]):
+        t0, t1 = 0.0, float(far[i])
+        for j in range(3):               # slab test (as _box_entry), scalars: no array per ray
+            a = 2 - j                    # z first: ground's bounds are thinnest in z, most rays leave there
+            s, v = float(start[i, a]), float(d[i, a])
+            if v != 0.0:
+                ta, tb = (box_lo[a] - s) / v, (box_hi[a] - s) / v
+                if ta > tb:
+                    ta, tb = tb, ta
+                t0, t1 = max(t0, ta), min(t1, tb)
+            elif s < box_lo[a] or s > box_hi[a]:
+                t0 = math.inf
+            if t0 > t1:
+                break
+        if t0 > t1:
+            continue
+        keep[n] = i
+        for a in range(3):
+            start_out[n, a], d_out[n, a] = start[i, a], d[i, a]
+        far_out[n] = far[i]
+        n += 1
+    return n
+
+
+@njit(cache=True, nogil=True)
+def scatter_hits(keep, geom_k, prim_k, ng_k, far_k, geom, prim, ng, far):
+    """The Embree hits of gathered rays (gather_reaching) back in place: geom, prim, Ng of ray keep[q]
+    from row q, its far limit (the hit's t where hit); every other ray a miss (geom −1)."""
+    geom[:] = MISS
+    prim[:] = MISS
+    for q in range(keep.shape[0]):
+        i = keep[q]
+        geom[i], prim[i], far[i] = geom_k[q], prim_k[q], far_k[q]
+        for a in range(3):
+            ng[i, a] = ng_k[q, a]
+
+
+@njit(cache=True, nogil=True)
 def tighten(ids, entry, o_l, d_l, best, far):
     """A link's rays (ids, box entry t, link-frame rays) kept, in place, where they enter its box
     before their best hit so far; far = that best (Embree's tfar). -> how many are kept."""
@@ -345,30 +407,45 @@ def finish_hits(d, min_range, max_range, best, src, face, ng_r, geom_t, prim_t, 
                 color[i, c] = color_t[f, c]
             material[i] = material_t[f]
             refine[i] = refine_t[f]
-        s = 1.0 / math.sqrt(nx * nx + ny * ny + nz * nz)
-        # facing the ray: a surface seen from behind (an open mesh, a wall's back) shades as its front
-        if nx * d[i, 0] + ny * d[i, 1] + nz * d[i, 2] > 0.0:
-            s = -s
-        normal[i, 0], normal[i, 1], normal[i, 2] = nx * s, ny * s, nz * s
+        normal[i, 0], normal[i, 1], normal[i, 2] = unit_facing(nx, ny, nz, d[i, 0], d[i, 1], d[i, 2])
+
+
+@njit(cache=True, nogil=True, inline="always")
+def unit_facing(nx, ny, nz, dx, dy, dz):
+    """The normal (nx, ny, nz) made unit and facing the ray d: a surface seen from behind (an open
+    mesh, a wall's back) shades as its front. (Scalars only: an inlined helper that takes arrays
+    costs a reference count per array per ray.)"""
+    s = 1.0 / math.sqrt(nx * nx + ny * ny + nz * nz)
+    if nx * dx + ny * dy + nz * dz > 0.0:
+        s = -s
+    return nx * s, ny * s, nz * s
 
 
 @njit(cache=True, nogil=True)
 def develop(pixel, o_z, d_z, d_w, distance, normal, reflect, headlamp, to_sun, intensity, ambient,
-            reference_range, shadowed, image, depth, rng):
-    """Write each hit ray's pixel: image[p, :] = reflect·(ambient + E·cos θ) (E·(r_ref/r)² for a
-    headlamp, l = −ray; a sun's l = to_sun, 0 where shadowed), range r, depth o_z + r·d_z."""
+            reference_range, shadowed, ray_label, background, image, depth, rng, label):
+    """Write each ray's pixel, all of it: its label; where it hit, image[p, :] = reflect·(ambient +
+    E·cos θ) (E·(r_ref/r)² for a headlamp, l = −ray; a sun's l = to_sun, 0 where shadowed), range r,
+    depth o_z + r·d_z; where not, ``background`` and NaN range and depth (one pass, into arrays not
+    filled before: the pixels' writes are the cost)."""
+    sx, sy, sz = to_sun[0], to_sun[1], to_sun[2]
     for k in range(pixel.shape[0]):
+        p = pixel[k]
+        label[p] = ray_label[k]
         r = distance[k]
         if not math.isfinite(r):
+            for c in range(image.shape[1]):
+                image[p, c] = background
+            rng[p] = math.nan
+            depth[p] = math.nan
             continue
-        p = pixel[k]
         if headlamp:
             cos = -(normal[k, 0] * d_w[k, 0] + normal[k, 1] * d_w[k, 1] + normal[k, 2] * d_w[k, 2])
             e = intensity * max(cos, 0.0) * (reference_range / r) ** 2
         elif shadowed[k]:
             e = 0.0
         else:
-            cos = normal[k, 0] * to_sun[0] + normal[k, 1] * to_sun[1] + normal[k, 2] * to_sun[2]
+            cos = normal[k, 0] * sx + normal[k, 1] * sy + normal[k, 2] * sz
             e = intensity * max(cos, 0.0)
         for c in range(image.shape[1]):
             image[p, c] = reflect[k, c] * (ambient + e)

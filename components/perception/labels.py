@@ -74,23 +74,23 @@ def ray_labels(distance, link, material, geom_t, prim_t, face_label, label):
     geom_t, prim_t: the terrain's Embree hits of these rays (length 0: no terrain scene)."""
     has_t = geom_t.shape[0] == distance.shape[0]
     for i in range(distance.shape[0]):
-        if not math.isfinite(distance[i]):
-            label[i] = NOTHING
-        elif link[i] >= 0:
-            label[i] = ROBOT + link[i]
-        elif has_t and geom_t[i] >= 0 and face_label[prim_t[i]] >= OBSTACLE:
-            label[i] = face_label[prim_t[i]]
-        elif material[i] >= 0:
-            label[i] = TERRAIN + material[i]
-        else:
-            label[i] = NOTHING
+        part = face_label[prim_t[i]] if has_t and geom_t[i] >= 0 else NOTHING
+        label[i] = hit_label(distance[i], link[i], material[i], part)
 
 
-@njit(cache=True, nogil=True)
-def scatter(index, values, out):
-    """out[index[k]] = values[k] (a camera's rays into its pixels)."""
-    for k in range(index.shape[0]):
-        out[index[k]] = values[k]
+@njit(cache=True, nogil=True, inline="always")
+def hit_label(distance, link, material, part):
+    """A ray's label (ray_labels' per ray) from its range, link row, material and ``part``: its terrain
+    face's label (an obstacle's is >= OBSTACLE), NOTHING when no terrain face was hit."""
+    if not math.isfinite(distance):
+        return NOTHING
+    if link >= 0:
+        return ROBOT + link
+    if part >= OBSTACLE:
+        return part
+    if material >= 0:
+        return TERRAIN + material
+    return NOTHING
 
 
 def labels_of(hits) -> np.ndarray:

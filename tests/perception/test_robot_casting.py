@@ -12,6 +12,7 @@ from scipy.spatial.transform import Rotation
 from scenes import F32, ROBOT, initial_link_poses, terrain, world_at
 from snakesim.components.perception import ray_caster as rc
 from snakesim.components.perception.hit_kernels import link_candidates
+from snakesim.components.perception.mount import rigid_links
 from snakesim.components.perception.ray_caster import CastBuffers, RayBundle, embree_scene
 
 MAX_RANGE = 30.0
@@ -186,6 +187,61 @@ def test_a_bundle_fixed_to_a_link_takes_its_hits_on_that_link_cast_once(world):
         assert np.count_nonzero(hits.link == row) > 100 and n_robot > 100
     with pytest.raises(ValueError, match="mount pose"):
         w.cast_from(R_wl @ R_ls, p_wl + R_wl @ p_ls + [0.0, 0.0, 0.01], o_s, d, MAX_RANGE, 1e-6, bundle)
+
+
+def test_links_fixed_to_the_mount_are_cast_once_while_they_stay_in_place():
+    """A lidar on its link on the head (the head, its module and cameras fixed to it:
+    .mount.rigid_links): their hits are cast once in their frames and taken while each link is where
+    the URDF puts it on the mount link, and must be the hits of casting every link at the instant
+    (a bundle without ``rigid``: the head and its module meet at coincident faces, where one posed
+    scene may report either); a head moved off its place (by 10 µm and 10 µrad, past
+    RayBundle.RIGID_TOLERANCE) is cast as any other link, with the same result."""
+    row, head = ROBOT.link_index("lidar"), ROBOT.link_index("head")
+    rigid = rigid_links(ROBOT, row)
+    assert {ROBOT.links[r] for r, _, _ in rigid} >= {"head", "module_09", "camera_left"}
+    R_ls, p_ls = np.eye(3), np.zeros(3)
+    d = sphere_directions(32, 128)
+    o_s = np.zeros_like(d)
+    bundle = RayBundle(o_s, d, mount=(row, R_ls, p_ls), rigid=rigid)
+    each_instant = RayBundle(o_s, d, mount=(row, R_ls, p_ls))
+    ground = terrain({"kind": "plane", "origin": (0.0, 0.0, -0.3)})
+    moved = initial_link_poses()
+    moved[head, :3] += [1e-5, 0.0, 0.0]
+    moved[head, 3:] = (Rotation.from_rotvec([0.0, 0.0, 1e-5]) * Rotation.from_quat(moved[head, 3:])).as_quat()
+    for poses, in_place in ((initial_link_poses(), True), (moved, False)):
+        w = world_at(ground, poses, robot_visible=True)
+        assert (head in bundle.rigid_in_place(w.rotations, w.link_poses[:, :3])) == in_place
+        R_wl, p_wl = w.link_pose(row)
+        R, p = R_wl @ R_ls, p_wl + R_wl @ p_ls
+        hits = {k: v.copy() for k, v in vars(w.cast_from(R, p, o_s, d, MAX_RANGE, 1e-6, bundle)[0]).items()}
+        ref = w.cast_from(R, p, o_s, d, MAX_RANGE, 1e-6, each_instant)[0]
+        assert np.count_nonzero(ref.link == head) > 100
+        np.testing.assert_array_equal(np.isfinite(hits["distance"]), np.isfinite(ref.distance))
+        hit = np.isfinite(ref.distance)
+        # the rays in a link's frame from the URDF's pose, not the instant's: float32 rounding of them
+        np.testing.assert_allclose(hits["distance"][hit], ref.distance[hit], rtol=0, atol=16 * F32)
+        np.testing.assert_array_equal(hits["link"], ref.link)
+        np.testing.assert_allclose(hits["normal"][hit], ref.normal[hit], rtol=0, atol=1e-6)
+
+
+def test_terrain_rays_that_cannot_reach_its_bounds_are_left_out_with_the_same_hits(world):
+    """``intersect_near`` casts only the rays whose segment up to their far limit reaches the terrain's
+    bounds: the same hits, distances and faces as casting them all (rays up and down, far limits from
+    a centimetre to past the ground)."""
+    rng = np.random.default_rng(3)
+    d = sphere_directions(24, 96)
+    start = (np.array([0.0, 0.0, 0.05]) + rng.normal(scale=0.02, size=d.shape)).astype(np.float32)
+    far = rng.choice([0.01, 0.1, 0.5, 5.0, MAX_RANGE], size=len(d)).astype(np.float32)
+    ter = world.terrain
+    a_far, b_far = far.copy(), far.copy()
+    a = rc._intersect(ter.scene, start, d.astype(np.float32), a_far)
+    b = ter.intersect_near(start, d.astype(np.float32), b_far, CastBuffers(len(d)).near())
+    hit = a[0] != -1
+    assert 100 < hit.sum() < 0.8 * len(d)          # some rays reach the ground, most do not
+    np.testing.assert_array_equal(b[0], a[0])
+    np.testing.assert_array_equal(b[1][hit], a[1][hit])
+    np.testing.assert_array_equal(b[2][hit], a[2][hit])
+    np.testing.assert_array_equal(b_far, a_far)
 
 
 def test_buffers_are_reused_without_leaking_the_previous_cast(world):
