@@ -7,15 +7,17 @@ The slide. The multibody's joints are revolute, continuous or fixed on a free-fl
 (components/multibody/urdf.py refuses prismatic joints), so the testbed's rails are a penalty on the link,
 at its origin, in world axes:
 
-    W = [f_x, −k y − c v_y, 0,  −k θ − c ω]       θ = vee((R − Rᵀ)/2) = 2 q_w (q_x, q_y, q_z)
+    W = [f_x, −k (y − y₀) − c v_y, 0,  −k θ − c ω]      θ = 2 e_w (e_x, e_y, e_z),  e = q ⊗ q₀⁻¹
     f_x = −F                                       towed (``tow`` F, N)
     f_x = −k (x − x₀ − V t) − c (v_x − V)          driven (``speed`` V, m/s: the carriage on a rail from x₀)
 
-θ the small-angle rotation vector of the link's axes from the world's: sinkage z and, towed, travel x stay
+θ the small-angle rotation vector of the link's attitude q from the held one q₀ (``rest_quaternion``: the
+world's axes by default; a module on its side, as the robot scenes lie, is held so), the vee of
+(E − Eᵀ)/2 for E = R R₀ᵀ, world axes: sinkage z and, towed, travel x stay
 free; driven, x follows the rail x₀ + V t, ahead of it by (drawbar pull) / k (2.5 mm for 50 N by default);
 sway y, roll, pitch and yaw are held (a counter-rotating pair's yaw couple and the tow's pitch moment go
 into the springs: ~1 N·m over the default 2·10⁴ N·m/rad is 0.05 mrad). The link starts with its axes on the
-world's and its origin at y = 0 (the springs' rest). The slopes are declared (a LinkWrenchJacobian, as the
+held attitude and its origin at y = y₀ (the springs' rest). The slopes are declared (a LinkWrenchJacobian, as the
 soil contacts'): ∂W/∂twist = −c and ∂W/∂δ = −k on the held axes (and x when driven), so a linearly
 implicit integrator takes the springs implicitly.
 
@@ -58,6 +60,14 @@ HELD = np.array([0.0, 1.0, 0.0, 1.0, 1.0, 1.0])      # y, roll, pitch, yaw held;
 DRIVEN = np.array([1.0, 1.0, 0.0, 1.0, 1.0, 1.0])    # x held to the rail too
 
 
+def _quat_mul(a, b) -> tuple[float, float, float, float]:
+    """a ⊗ b, quaternions (x, y, z, w)."""
+    ax, ay, az, aw = (float(v) for v in a)
+    bx, by, bz, bw = b
+    return (aw * bx + ax * bw + ay * bz - az * by, aw * by - ax * bz + ay * bw + az * bx,
+            aw * bz + ax * by - ay * bx + az * bw, aw * bw - ax * bx - ay * by - az * bz)
+
+
 class DrawbarCarriageParams(Params):
     link: str | None = Field(None, description="the link on the carriage, its origin towed and measured "
                                                  "(default: the URDF's root)")
@@ -67,6 +77,9 @@ class DrawbarCarriageParams(Params):
                                                   "towing it (the slip is set, the drawbar pull measured); "
                                                   "None: towed by ``tow``")
     x0: float = Field(0.0, description="m, where the driven carriage's rail starts (the link's initial x)")
+    y0: float = Field(0.0, description="m, the rail's line: the link's origin is held at y = y0 (world)")
+    rest_quaternion: tuple[float, float, float, float] = Field(
+        (0.0, 0.0, 0.0, 1.0), description="the link's held attitude (x, y, z, w; world): its start's")
     stiffness: float = Field(2.0e4, gt=0, description="N/m on y; N·m/rad on roll, pitch and yaw")
     damping: float = Field(2.0e3, ge=0, description="N·s/m on y; N·m·s/rad on roll, pitch and yaw")
     steady_window: float = Field(1.5, gt=0, description="s, the run's last stretch the report averages over")
@@ -100,6 +113,11 @@ class DrawbarCarriage(Component[DrawbarCarriageParams]):
             raise ValueError(f"{self.name}: tow = {p.tow:g} N and speed = {p.speed:g} m/s: the carriage is towed "
                              "(tow) or driven (speed), not both; set one")
         _, self.row = robot.mounted_link(p.link, self.name)
+        q0 = np.asarray(p.rest_quaternion, dtype=float)
+        if not abs(np.linalg.norm(q0) - 1.0) < 1e-6:
+            raise ValueError(f"{self.name}: rest_quaternion {list(p.rest_quaternion)} is not a unit quaternion "
+                             f"(norm {np.linalg.norm(q0):.6g}); give (x, y, z, w) with x² + y² + z² + w² = 1")
+        self.q0_inv = (-q0[0], -q0[1], -q0[2], q0[3])
         screws = robot.derived(screw_layout)
         on = np.flatnonzero((screws.parent_row == self.row) | (screws.screw_row == self.row))
         self.spin_dof, self.spin_mult = screws.spin_dof[on], screws.spin_mult[on]
@@ -116,15 +134,15 @@ class DrawbarCarriage(Component[DrawbarCarriageParams]):
 
     def output(self, t, x, u, y):
         p, r = self.p, self.row
-        qx, qy, qz, qw = u.link_poses[r, 3:7]
+        ex, ey, ez, ew = _quat_mul(u.link_poses[r, 3:7], self.q0_inv)    # the attitude's error from q0
         v = u.link_velocities[r]
         w = y.wrenches
         w[...] = 0.0
         w[r, 0] = self._fx(t, u.link_poses[r, 0], v[0])
-        w[r, 1] = -p.stiffness * u.link_poses[r, 1] - p.damping * v[1]
-        w[r, 3] = -p.stiffness * 2.0 * qw * qx - p.damping * v[3]
-        w[r, 4] = -p.stiffness * 2.0 * qw * qy - p.damping * v[4]
-        w[r, 5] = -p.stiffness * 2.0 * qw * qz - p.damping * v[5]
+        w[r, 1] = -p.stiffness * (u.link_poses[r, 1] - p.y0) - p.damping * v[1]
+        w[r, 3] = -p.stiffness * 2.0 * ew * ex - p.damping * v[3]
+        w[r, 4] = -p.stiffness * 2.0 * ew * ey - p.damping * v[4]
+        w[r, 5] = -p.stiffness * 2.0 * ew * ez - p.damping * v[5]
 
     def _fx(self, t: float, x: float, vx: float) -> float:
         """The carriage's force along x (N): −F towed, the rail's spring-damper driven."""

@@ -1,7 +1,8 @@
 """drawbar_carriage alone (components/terramechanics/drawbar_carriage.py), on the drawbar test's specimen:
-the slide's wrench against its closed form, towed and driven, its declared slopes against finite differences
-of it, the report's slip and drawbar pull on a prescribed track, and the bad settings named (a link that is
-not the robot's, a carriage both towed and driven)."""
+the slide's wrench against its closed form (towed, driven, held on its side), its declared slopes against
+finite differences of it, the report's slip and drawbar pull on a prescribed track, and the bad settings
+named (a link that is not the robot's, a carriage both towed and driven, a rest attitude that is no
+rotation)."""
 
 from __future__ import annotations
 
@@ -73,10 +74,35 @@ def test_the_driven_slide_holds_x_to_its_rail(robot):
     assert w[row, 1:].tolist() == [0.0] * 5
 
 
-@pytest.mark.parametrize("mode", [{}, {"tow": 0.0, "speed": 0.07}], ids=["towed", "driven"])
+ON_ITS_SIDE = tuple(quat([math.pi / 2, 0.0, 0.0]))      # rolled 90° about x, as the robot scenes lie
+
+
+def test_a_link_held_on_its_side_and_off_the_axis_rests_there(robot):
+    # held at q0 (rolled 90°) and y0: no wrench there but the tow; turned by δ about world z from q0 (E = R R0ᵀ
+    # = Rz(δ)): the yaw spring's −k δ (to O(δ³)), whatever q0 is
+    h = carriage(robot, rest_quaternion=ON_ITS_SIDE, y0=0.3)
+    poses, vels, row = state(robot, [0.0, 0.3, 0.02], [0, 0, 0], np.zeros(6))
+    poses[row, 3:] = ON_ITS_SIDE
+    h.inputs.link_poses, h.inputs.link_velocities = poses, vels
+    np.testing.assert_allclose(h.outputs()["wrenches"][row], [-TOW, 0, 0, 0, 0, 0], atol=1e-9)
+    delta = 2e-3
+    poses[row, 3:] = quat_mul(quat([0.0, 0.0, delta]), np.array(ON_ITS_SIDE))
+    h.inputs.link_poses = poses
+    np.testing.assert_allclose(h.outputs()["wrenches"][row, 3:], [0.0, 0.0, -K * delta], atol=K * delta ** 3)
+
+
+def test_a_rest_quaternion_that_is_not_a_rotation_is_named(robot):
+    with pytest.raises(ValueError, match=r"rest_quaternion \[0.0, 0.0, 0.0, 2.0\] is not a unit quaternion"):
+        carriage(robot, rest_quaternion=(0.0, 0.0, 0.0, 2.0))
+
+
+@pytest.mark.parametrize("mode", [{}, {"tow": 0.0, "speed": 0.07}, {"rest_quaternion": ON_ITS_SIDE}],
+                         ids=["towed", "driven", "on-its-side"])
 def test_declared_slopes_are_the_wrenchs_derivatives(robot, mode):
     h = carriage(robot, **mode)
     poses, vels, row = state(robot, [0.2, 0.005, 0.01], [1e-3, 2e-3, -1e-3], [0.05, 0.01, 0.0, 0.02, 0.0, -0.1])
+    q0 = np.array(mode.get("rest_quaternion", (0.0, 0.0, 0.0, 1.0)))
+    poses[row, 3:] = quat_mul(poses[row, 3:], q0)          # the same small error, from the held attitude
     h.inputs.link_poses, h.inputs.link_velocities = poses, vels
     jac = h.c.port_jacobian("wrenches", 0.0, None, h.u, None)
     assert list(jac.rows) == [row]
