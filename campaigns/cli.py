@@ -95,7 +95,8 @@ def sweep(assembly, dispersions, n, seed, out_dir, sets, config, duration, dt, i
     except SnakesimError as e:
         raise click.ClickException(str(e)) from None
     try:
-        summary = summarize(res["table"], out, plan.dispersions.success, plots=not no_plots)
+        summary = summarize(res["table"], out, plan.dispersions.success, plots=not no_plots,
+                            curves=plan.dispersions.curves)
     except SnakesimError as e:      # a full or read-only disk: the file and the cause (framework/output_files.py)
         raise click.ClickException(str(e)) from None
     counts = ", ".join(f"{v} {k}" for k, v in summary["by_status"].items())
@@ -103,7 +104,7 @@ def sweep(assembly, dispersions, n, seed, out_dir, sets, config, duration, dt, i
     for r in summary["sensitivity_top"][:5]:
         click.echo(f"  rho = {r['spearman_rho']:+.2f}  {r['parameter']} -> {r['metric']}", err=True)
     click.echo(f"wrote {out}/results.parquet, results.csv, summary.json, sensitivity.csv"
-               + ("" if no_plots else ", hist.png, scatter.png, success_by_parameter.png"), err=True)
+               + "".join(f", {name}" for name in summary.get("plots", [])), err=True)
     failed = summary["failed"]
     if failed:
         # a script or CI tells a campaign with failed runs from a clean one (framework/outcomes.py)

@@ -13,6 +13,8 @@ A dispersion file is YAML::
       components.pend.params.omega0: {dist: latin_hypercube, low: -0.1, high: 0.1}
     metrics: ...                              # optional, see metrics.py
     success: [ok]                             # optional: statuses that count as success
+    curves:                                   # optional: curves.png, one panel per entry, y against x
+      - {x: components.pend.params.length, y: theta_final}   # each a dispersed path or a declared metric
 
 Every continuous distribution and ``choice`` is an inverse CDF ``ppf(u)`` of a
 uniform ``u`` in (0, 1). A random draw takes ``u`` from a generator keyed by
@@ -40,7 +42,7 @@ from snakesim.framework.yaml_source import LocatedDict, load_yaml
 
 DISTRIBUTIONS = ("uniform", "normal", "log_uniform", "truncated_normal", "choice", "grid", "latin_hypercube")
 SAMPLINGS = ("random", "lhs")
-TOP_KEYS = ("seed", "dispersions", "metrics", "success")
+TOP_KEYS = ("seed", "dispersions", "metrics", "success", "curves")
 _U_BITS = 53          # u = (integer + 0.5) / 2**53: never exactly 0 or 1, so ppf is always finite
 
 
@@ -95,6 +97,7 @@ class DispersionFile:
     metrics: dict | None = None          # raw metric declarations (metrics.parse_metrics checks them)
     success: tuple[str, ...] = ("ok",)
     text: str = ""                        # the file as written (kept with the campaign for resume)
+    curves: tuple[tuple[str, str], ...] = ()   # (x, y) column pairs for curves.png (report.py)
 
     @property
     def paths(self) -> list[str]:
@@ -215,8 +218,32 @@ def load_dispersions(path: str | Path) -> DispersionFile:
     if not isinstance(success, list) or not success or any(s not in STATUSES for s in success):
         raise ConfigError(f"'success' lists run statuses, got {success!r}; valid: {', '.join(STATUSES)}",
                           data.where("success"), "success")
+    curves = parse_curves(data, [d.path for d in disps], data.get("metrics"), file)
     return DispersionFile(path=file, seed=seed, dispersions=disps, metrics=data.get("metrics"),
-                          success=tuple(success), text=path.read_text())
+                          success=tuple(success), text=path.read_text(), curves=curves)
+
+
+def parse_curves(data, paths: list[str], metrics, file: str) -> tuple[tuple[str, str], ...]:
+    """The file's ``curves``: a list of {x, y}, each a dispersed path or a declared metric's name (a curve
+    plots what the file names, so it needs a ``metrics`` section to name the metrics)."""
+    raw = data.get("curves")
+    if raw is None:
+        return ()
+    where = data.where("curves")
+    if not isinstance(raw, list) or not raw:
+        raise ConfigError(f"'curves' is a list of {{x: NAME, y: NAME}}, got {raw!r}", where, "curves")
+    names = [*paths, *(metrics or {})]
+    out = []
+    for i, c in enumerate(raw):
+        at = c.where() if hasattr(c, "where") else where
+        if not isinstance(c, dict) or set(c) != {"x", "y"}:
+            raise ConfigError(f"a curve is {{x: NAME, y: NAME}}, got {c!r}", at, f"curves[{i}]")
+        for axis in ("x", "y"):
+            if c[axis] not in names:
+                raise ConfigError(f"curve {axis} '{c[axis]}' is neither a dispersed path nor a declared metric; "
+                                  f"valid: {', '.join(map(str, names))}", at, f"curves[{i}].{axis}")
+        out.append((str(c["x"]), str(c["y"])))
+    return tuple(out)
 
 
 # -- sampling ------------------------------------------------------------------

@@ -4,6 +4,8 @@
                               parameter over the successful runs, ranked by |rho| (p-value, n)
 ``hist.png``                  a histogram per dispersed parameter and per metric (successful runs)
 ``scatter.png``               each metric against each dispersed parameter (successful runs)
+``curves.png``                the dispersion file's ``curves``: y against x, a panel each (successful runs
+                              joined in x's order; the others as red crosses)
 ``success_by_parameter.png``  success rate per parameter bin (10 equal-count bins; a bar per value
                               for parameters with few distinct values)
 ``summary.json``              counts per status, success rate, failed runs (status not in ``success``) and
@@ -87,8 +89,9 @@ def _grid(n: int):
     return (n + cols - 1) // cols, cols
 
 
-def plot(table, params: list[str], metrics: list[str], ok: np.ndarray, out: Path) -> list[str]:
-    """Write the three PNGs; returns their names."""
+def plot(table, params: list[str], metrics: list[str], ok: np.ndarray, out: Path,
+         curves: tuple[tuple[str, str], ...] = ()) -> list[str]:
+    """Write the PNGs (three, and curves.png for ``curves``); returns their names."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -136,6 +139,8 @@ def plot(table, params: list[str], metrics: list[str], ok: np.ndarray, out: Path
         fig.tight_layout()
         _save(fig, out / "scatter.png", 100)
         written.append("scatter.png")
+    if curves:
+        written.append(_curves(plt, table, curves, ok, out))
     if pars:
         r, c = _grid(len(pars))
         fig, axes = plt.subplots(r, c, figsize=(3.4 * c, 2.6 * r), squeeze=False)
@@ -160,14 +165,41 @@ def plot(table, params: list[str], metrics: list[str], ok: np.ndarray, out: Path
     return written
 
 
+def _curves(plt, table, curves, ok: np.ndarray, out: Path) -> str:
+    """curves.png: per (x, y) column pair, y against x, the successful runs joined in x's order."""
+    r, c = _grid(len(curves))
+    fig, axes = plt.subplots(r, c, figsize=(4.0 * c, 3.2 * r), squeeze=False)
+    for ax, (xn, yn) in zip(axes.flat, curves):
+        x, y = _numeric(table.column(xn)), _numeric(table.column(yn))
+        if x is None or y is None:
+            ax.set_title(f"{yn} against {xn}: not numeric", fontsize=7)
+            continue
+        good = ok & np.isfinite(x) & np.isfinite(y)
+        order = np.argsort(x[good], kind="stable")
+        ax.plot(x[good][order], y[good][order], "o-", ms=4, color="#4477aa")
+        ax.plot(x[~ok], np.where(np.isfinite(y[~ok]), y[~ok], np.nan), "x", color="#cc3311")
+        ax.set_xlabel(xn, fontsize=7)
+        ax.set_ylabel(yn, fontsize=7)
+        ax.tick_params(labelsize=6)
+        ax.grid(alpha=0.3)
+    for ax in list(axes.flat)[len(curves):]:
+        ax.axis("off")
+    fig.suptitle(f"successful runs ({int(ok.sum())} of {len(ok)})", fontsize=9)
+    fig.tight_layout()
+    _save(fig, out / "curves.png", 110)
+    return "curves.png"
+
+
 def _numeric_list(vals):
     if all(v is None or (isinstance(v, (int, float)) and not isinstance(v, bool)) for v in vals):
         return np.array([np.nan if v is None else float(v) for v in vals])
     return None
 
 
-def summarize(table, out: Path, success: tuple[str, ...] = ("ok",), plots: bool = True) -> dict:
-    """Write sensitivity.csv, summary.json and (``plots``) the PNGs; return the summary."""
+def summarize(table, out: Path, success: tuple[str, ...] = ("ok",), plots: bool = True,
+              curves: tuple[tuple[str, str], ...] = ()) -> dict:
+    """Write sensitivity.csv, summary.json and (``plots``) the PNGs, curves.png for ``curves`` (x, y) column
+    pairs; return the summary."""
     out = Path(out)
     meta = table.schema.metadata or {}
     params = json.loads(meta.get(b"snakesim.parameters", b"[]"))
@@ -186,6 +218,6 @@ def summarize(table, out: Path, success: tuple[str, ...] = ("ok",), plots: bool 
                "failed": int((~ok).sum()), "by_failure_kind": by_kind,
                "sensitivity_top": ranking[:20]}
     if plots and len(status):
-        summary["plots"] = plot(table, params, metrics, ok, out)
+        summary["plots"] = plot(table, params, metrics, ok, out, curves)
     atomic_write(out / "summary.json", json.dumps(summary, indent=2))
     return summary

@@ -30,6 +30,8 @@ dispersions:
 metrics:
   theta_final: {signal: pend.theta, reduce: final}
   omega_peak: {signal: pend.omega, reduce: max_abs}
+curves:
+  - {x: components.pend.params.theta0, y: omega_peak}
 """
 SCENE = SceneSpec("pendulum", sim=(("duration", 1.0),))
 
@@ -55,7 +57,7 @@ def pool_run(plan, tmp_path_factory):
 
 
 @pytest.mark.slow
-def test_failing_runs_are_recorded_with_their_reason_and_the_campaign_goes_on(pool_run):
+def test_failing_runs_are_recorded_with_their_reason_and_the_campaign_goes_on(plan, pool_run):
     out, res = pool_run
     rows = res["table"].to_pylist()
     assert [r["run"] for r in rows] == list(range(N))
@@ -65,9 +67,10 @@ def test_failing_runs_are_recorded_with_their_reason_and_the_campaign_goes_on(po
     assert "pendulum went over the top" in rows[1]["reason"]
     assert rows[0]["theta_final"] is not None and rows[2]["theta_final"] is None
     assert (out / "results.parquet").exists() and (out / "results.csv").exists()
-    summary = summarize(res["table"], out, plots=True)
+    summary = summarize(res["table"], out, plots=True, curves=plan.dispersions.curves)
     assert summary["by_status"] == {"error": 2, "ok": 2, "stopped": 2}
     assert (out / "hist.png").exists() and (out / "success_by_parameter.png").exists()
+    assert "curves.png" in summary["plots"] and (out / "curves.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert (out / "scatter.png").exists() and (out / "sensitivity.csv").exists()
 
 

@@ -186,3 +186,31 @@ def test_a_dispersion_an_explicit_flag_would_override_is_refused(tmp_path):
     f = _file(tmp_path, "dispersions:\n  sim.duration: {dist: uniform, low: 1, high: 2}\n")
     with pytest.raises(ConfigError, match="would be overridden by --duration 3"):
         prepare(SceneSpec("pendulum", sim=(("duration", 3.0),)), str(f), 2)
+
+
+CURVES_HEAD = """
+dispersions:
+  damping: {dist: uniform, low: 0.01, high: 0.2}
+metrics:
+  theta_final: {signal: pend.theta, reduce: final}
+"""
+
+
+def test_curves_name_a_dispersed_path_and_a_metric(tmp_path):
+    df = load_dispersions(_file(tmp_path, CURVES_HEAD + "curves:\n  - {x: damping, y: theta_final}\n"))
+    assert df.curves == (("damping", "theta_final"),)
+    assert load_dispersions(_file(tmp_path, CURVES_HEAD, "none.yaml")).curves == ()
+
+
+@pytest.mark.parametrize("curves, message", [
+    ("curves: {x: damping, y: theta_final}", "'curves' is a list of {x: NAME, y: NAME}"),
+    ("curves: []", "'curves' is a list of {x: NAME, y: NAME}"),
+    ("curves:\n  - {x: damping}", "a curve is {x: NAME, y: NAME}"),
+    ("curves:\n  - {x: damping, y: omega_peak}",
+     "curve y 'omega_peak' is neither a dispersed path nor a declared metric; valid: damping, theta_final"),
+])
+def test_bad_curves_name_the_file_key_and_what_is_valid(tmp_path, curves, message):
+    path = _file(tmp_path, CURVES_HEAD + curves + "\n")
+    with pytest.raises(ConfigError) as e:
+        load_dispersions(path)
+    assert message in str(e.value) and str(path) in str(e.value), str(e.value)
