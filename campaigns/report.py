@@ -84,6 +84,21 @@ def _save(fig, path: Path, dpi: int) -> None:
         plt.close(fig)
 
 
+def _successful(ok: np.ndarray) -> str:
+    return f"successful runs ({int(ok.sum())} of {len(ok)})"
+
+
+def _finish(fig, axes, used: int, path: Path, title: str | None = None) -> str:
+    """Blank the panels past the ``used`` first, title, lay out and save the figure; its file name."""
+    for ax in list(axes.flat)[used:]:
+        ax.axis("off")
+    if title:
+        fig.suptitle(title, fontsize=9)
+    fig.tight_layout()
+    _save(fig, path, 110)
+    return path.name
+
+
 def _grid(n: int):
     cols = min(4, max(1, n))
     return (n + cols - 1) // cols, cols
@@ -115,12 +130,7 @@ def plot(table, params: list[str], metrics: list[str], ok: np.ndarray, out: Path
                 ax.bar(range(len(labels)), counts, color="#4477aa", tick_label=list(labels))
             ax.set_title(name, fontsize=7)
             ax.tick_params(labelsize=6)
-        for ax in list(axes.flat)[len(series):]:
-            ax.axis("off")
-        fig.suptitle(f"successful runs ({int(ok.sum())} of {len(ok)})", fontsize=9)
-        fig.tight_layout()
-        _save(fig, out / "hist.png", 110)
-        written.append("hist.png")
+        written.append(_finish(fig, axes, len(series), out / "hist.png", _successful(ok)))
     num_pars = [(p, x) for p in pars if (x := _numeric(table.column(p))) is not None]
     if num_pars and mets:
         fig, axes = plt.subplots(len(mets), len(num_pars), figsize=(2.6 * len(num_pars), 2.0 * len(mets)),
@@ -157,11 +167,7 @@ def plot(table, params: list[str], metrics: list[str], ok: np.ndarray, out: Path
             ax.set_ylim(0, 1.05)
             ax.set_title(p, fontsize=7)
             ax.set_ylabel("success rate", fontsize=6)
-        for ax in list(axes.flat)[len(pars):]:
-            ax.axis("off")
-        fig.tight_layout()
-        _save(fig, out / "success_by_parameter.png", 110)
-        written.append("success_by_parameter.png")
+        written.append(_finish(fig, axes, len(pars), out / "success_by_parameter.png"))
     return written
 
 
@@ -182,12 +188,7 @@ def _curves(plt, table, curves, ok: np.ndarray, out: Path) -> str:
         ax.set_ylabel(yn, fontsize=7)
         ax.tick_params(labelsize=6)
         ax.grid(alpha=0.3)
-    for ax in list(axes.flat)[len(curves):]:
-        ax.axis("off")
-    fig.suptitle(f"successful runs ({int(ok.sum())} of {len(ok)})", fontsize=9)
-    fig.tight_layout()
-    _save(fig, out / "curves.png", 110)
-    return "curves.png"
+    return _finish(fig, axes, len(curves), out / "curves.png", _successful(ok))
 
 
 def _numeric_list(vals):
