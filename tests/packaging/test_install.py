@@ -41,7 +41,7 @@ def _check_run(out: Path, n_rows: int, column: str) -> None:
 def _data_files(root: Path) -> set[str]:
     """YAML files under the packaged folders, as paths inside the wheel."""
     out = set()
-    for folder in ("assemblies", "configs", "robots", "terrains"):
+    for folder in ("assemblies", "configs", "robots", "terrains", "campaigns"):
         for p in (root / folder).rglob("*.yaml"):
             if "__pycache__" not in p.parts:
                 out.add(f"snakesim/{p.relative_to(root).as_posix()}")
@@ -82,6 +82,9 @@ def test_wheel_installs_and_finds_its_data(scratch):
     run([snakesim, "run", "mass-spring-chain", "--duration", "0.05", "--set", "n=3", "--out", work / "chain",
          "--quiet"], cwd=work, env=env)
     _check_run(work / "chain", 51, "cell2/mass.x")
+    # a scene whose robot is a URDF beside the designs' (../robots/specimens/, relative to the scene's file)
+    check = run([snakesim, "check", "snow-drawbar-pull"], cwd=work, env=env).stdout
+    assert "drawbar_carriage" in check and "specimens/eels-1.0-module.urdf" in check, check
 
 
 def test_editable_install_finds_the_working_tree(scratch):
